@@ -1,0 +1,28 @@
+// Isosurface extraction by marching tetrahedra (paper, section "Isosurface
+// generation algorithm", steps 1-6), with the consistency rules that make
+// pieces from different domains fit together exactly:
+//  - a node whose value equals the level counts as above it, whatever domain
+//    holds it (instead of the paper's domain-dependent epsilon shift);
+//  - a crossing is interpolated from the end with the smaller global id, so
+//    every domain computes bit-identical positions for a shared vertex;
+//  - triangle orientation follows from the field alone: normals point towards
+//    increasing values;
+//  - each vertex is keyed by its global edge id and locked when its edge lies
+//    on an interface of the domain.
+#pragma once
+
+#include "tetiso/mesh.hpp"
+
+namespace tetiso {
+
+struct ExtractOptions {
+    // Threads to use inside the domain; 0 means OpenMP's default. The output
+    // does not depend on it.
+    int threads = 1;
+};
+
+// Throws tetiso::Error if a field value is not finite or a tetrahedron refers
+// to a node that does not exist.
+Piece extract(const Domain& domain, float level, const ExtractOptions& options = {});
+
+} // namespace tetiso

@@ -1,0 +1,41 @@
+// Reading and writing surfaces. Two formats, chosen by file extension:
+//  - .ply: binary little-endian PLY; vertex key as two uint32 properties
+//    (key_hi, key_lo) and flags as uchar, which PLY readers that do not know
+//    them ignore;
+//  - .vtp: VTK XML PolyData, raw appended binary, opened by ParaView; key
+//    (UInt64) and flags (UInt8) are point data arrays.
+// Writers never leave a partial file: they write to a temporary name in the
+// same directory and rename it at the end. Readers check every count against
+// the file and every index against the vertex count.
+#pragma once
+
+#include <filesystem>
+
+#include "tetiso/mesh.hpp"
+
+namespace tetiso {
+
+enum class SurfaceFormat { ply, vtp };
+
+// Throws tetiso::Error naming the path if its extension is neither.
+SurfaceFormat surface_format(const std::filesystem::path& path);
+
+// Throws tetiso::Error naming the path if it cannot be written; in that case
+// nothing is left at `path` (an earlier file there is kept unchanged).
+void write_piece(const Piece& piece, const std::filesystem::path& path);
+
+// Reads a surface written by tetiso or, for PLY, by other tools (ascii or
+// binary, float or double coordinates, any integer list type for faces;
+// polygons are fanned into triangles). Vertices without keys get keys 0..n-1.
+// Vertices are reordered by key if needed so that the Piece invariant holds.
+// Throws tetiso::Error naming the path and what is wrong.
+Piece read_piece(const std::filesystem::path& path);
+
+// Runs `write` with a temporary path beside `path` and renames the result to
+// `path` once `write` returns; removes the temporary file if it throws.
+template <class WriteFunction>
+void write_atomically(const std::filesystem::path& path, WriteFunction&& write);
+
+} // namespace tetiso
+
+#include "tetiso/detail/write_atomically.hpp"

@@ -1,0 +1,72 @@
+// The two data types that flow through tetiso, both structures of flat arrays
+// (docs/ARCHITECTURE.md, "Data"):
+//
+//   Domain — one part of a tetrahedral mesh with a nodal field, as a solver
+//            hands it over: node positions and values, global node ids, which
+//            interface faces each node lies on, and tetrahedra.
+//   Piece  — a triangulated isosurface (or a part of one): vertex positions,
+//            the global edge key of each vertex, per-vertex flags, triangles.
+//
+// A Piece keeps one invariant that every stage relies on: its vertices are
+// sorted by key and the keys are unique. Seaming two pieces is then a linear
+// merge, and two pieces of the same surface compare element by element.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace tetiso {
+
+using GlobalId = std::int64_t;
+using EdgeKey = std::uint64_t;
+
+// Largest global node id that fits in half of an EdgeKey.
+inline constexpr GlobalId kMaxGlobalId = (GlobalId{1} << 32) - 1;
+
+// The key of the mesh edge between two nodes: both global ids packed, the
+// smaller in the high half. It depends on the edge alone, never on the domain
+// that computed it, which is what makes seaming algebraic.
+constexpr EdgeKey edge_key(GlobalId a, GlobalId b) {
+    const GlobalId lo = a < b ? a : b;
+    const GlobalId hi = a < b ? b : a;
+    return (static_cast<EdgeKey>(lo) << 32) | static_cast<EdgeKey>(hi);
+}
+constexpr GlobalId edge_key_low(EdgeKey key) { return static_cast<GlobalId>(key >> 32); }
+constexpr GlobalId edge_key_high(EdgeKey key) { return static_cast<GlobalId>(key & 0xffffffffu); }
+
+struct Domain {
+    int id = 0;
+    std::vector<float> x, y, z;     // node positions
+    std::vector<float> f;           // nodal field, linear inside each tetrahedron
+    std::vector<GlobalId> gid;      // global node id, unique over the whole mesh
+    // Bit s is set when the node lies on interface surface s of this domain
+    // (a surface it shares with other domains; the outer boundary of the whole
+    // mesh is no interface). An edge lies on an interface exactly when the
+    // masks of its two ends share a bit.
+    std::vector<std::uint8_t> interface;
+    std::vector<std::int32_t> tets; // 4 local node indices each, positively oriented
+
+    std::size_t node_count() const { return gid.size(); }
+    std::size_t tet_count() const { return tets.size() / 4; }
+};
+
+enum VertexFlag : std::uint8_t {
+    // The vertex lies on an interface to a domain that is not part of this
+    // piece yet: reduction must neither move nor remove it.
+    kLocked = 1u << 0,
+};
+
+struct Piece {
+    std::vector<float> x, y, z;
+    std::vector<EdgeKey> key;           // sorted ascending, unique
+    std::vector<std::uint8_t> flags;    // VertexFlag bits
+    std::vector<std::int32_t> triangles; // 3 vertex indices each; counter-clockwise
+                                         // seen from the side of increasing field
+    std::vector<int> domains;           // sorted ids of the domains this piece covers
+
+    std::size_t vertex_count() const { return key.size(); }
+    std::size_t triangle_count() const { return triangles.size() / 3; }
+};
+
+} // namespace tetiso
