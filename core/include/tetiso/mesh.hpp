@@ -69,4 +69,9 @@ struct Piece {
     std::size_t triangle_count() const { return triangles.size() / 3; }
 };
 
+// Restores the Piece invariant after a stage that numbered vertices in
+// another order: reorders vertices by key (stable) and renumbers triangles.
+// Returns false, leaving the piece sorted, if two vertices share a key.
+bool order_by_key(Piece& piece);
+
 } // namespace tetiso

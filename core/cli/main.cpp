@@ -1,0 +1,41 @@
+// The `tetiso` command: argument parsing and error reporting only; every
+// stage lives in the library. Any error is one line on stderr and exit 2.
+#include <cstdio>
+#include <iostream>
+
+#include "commands.hpp"
+#include "tetiso/error.hpp"
+
+int main(int argc, char** argv) {
+    CLI::App app{"tetiso: reduced isosurfaces of large tetrahedral meshes, in parallel"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "tetiso 0.1.0");
+    tetiso::cli::Command run;
+    tetiso::cli::add_extract_command(app, run);
+    tetiso::cli::add_check_command(app, run);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::CallForHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        std::cerr << "tetiso: " << e.what() << " (see tetiso --help)\n";
+        return 2;
+    }
+    try {
+        run();
+    } catch (const tetiso::Error& e) {
+        std::cerr << "tetiso: " << e.what() << '\n';
+        return 2;
+    } catch (const std::bad_alloc&) {
+        std::cerr << "tetiso: out of memory\n";
+        return 2;
+    } catch (const std::exception& e) {
+        std::cerr << "tetiso: internal error: " << e.what() << '\n';
+        return 3;
+    }
+    return 0;
+}

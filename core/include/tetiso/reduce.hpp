@@ -1,0 +1,90 @@
+// Isosurface reduction (paper, section "Isosurface reduction and seaming"):
+// rounds of parallel edge collapse and edge flip driven by the Φ criterion.
+//
+// Each round computes Φ for every edge from the two leaves (the fans of faces
+// around its ends), turns the edges whose Φ exceeds Φ* — and the paper's
+// special branches: very short edges, valence-3 vertices, border edges, flips
+// of long edges between narrow triangles — into candidate operations, drops
+// those that would change the topology or spoil the geometry, picks an
+// independent set of them (no two at path length below 2) in parallel and
+// deterministically, and applies it. Rounds repeat until no candidate is left,
+// two rounds in a row collapse nothing, or max_rounds is reached.
+//
+// Guarantees (for valid input): every component keeps its genus and its
+// boundary loops, the surface stays a consistently oriented 2-manifold, no
+// triangle of zero area is created (those of the input are removed where the
+// topology allows), vertices flagged kLocked keep their position bit for bit
+// and are never removed, border vertices stay on the border, vertex keys stay
+// sorted and unique. The output does not depend on the thread count.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "tetiso/mesh.hpp"
+
+namespace tetiso {
+
+struct ReduceOptions {
+    // Φ*: an edge is collapsed when Φ > phi. Φ is a cosine-like measure of how
+    // flat (or evenly bent along the edge) the two leaves are: 1 for a flat
+    // fan, cos(α) when a face of a leaf turns by α from its side's reference
+    // face. Valid range (0, 1]. The default 0.9 lets a leaf bend by about 25°,
+    // which on the paper's test surface (N = 100) gives more than 10x fewer
+    // triangles while max_error bounds the distance; see docs and tests.
+    double phi = 0.9;
+    // Threads; 0 means OpenMP's default. The output does not depend on it.
+    int threads = 1;
+    // Upper bound on the number of rounds (>= 0).
+    int max_rounds = 200;
+    // A collapse or flip may not create a triangle whose smallest angle is
+    // below this bound, unless the triangle it replaces was already worse
+    // (so collapses that clean up degenerate triangles stay possible).
+    // Valid range [0, 30].
+    double min_angle_degrees = 5.0;
+    // Absolute bound on the estimated distance between the reduced and the
+    // input surface (an accumulated per-triangle bound built from distances
+    // of moved vertices to the planes of the faces they replace; see
+    // reduce.cpp). <= 0 means no bound: Φ alone decides. For marching-tets
+    // surfaces a good value is a fraction of the lattice spacing h, e.g. 0.25 h.
+    double max_error = 0.0;
+    // No surviving triangle of a collapse may turn its normal by more than this.
+    double max_normal_turn_degrees = 45.0;
+    // An edge shorter than short_edge_ratio times the mean length of the other
+    // edges of its two faces (or of length 0) is collapsed whatever Φ is.
+    double short_edge_ratio = 0.1;
+    // Edge flips: an interior edge between two faces that are coplanar within
+    // flip_max_dihedral_degrees is flipped when that raises the smaller
+    // minimum angle of the two faces by more than 20 %.
+    bool flips = true;
+    double flip_max_dihedral_degrees = 10.0;
+    // Passes of the parallel independent-set selection per round; later
+    // passes add operations that do not touch the ones already chosen.
+    int selection_passes = 4;
+};
+
+struct ReduceRound {
+    int round = 0;
+    std::size_t candidates = 0; // legal operations offered to the selection
+    std::size_t collapses = 0;
+    std::size_t flips = 0;
+};
+
+struct ReduceReport {
+    std::size_t triangles_in = 0, triangles_out = 0;
+    std::size_t vertices_in = 0, vertices_out = 0;
+    std::vector<ReduceRound> rounds;
+    double seconds = 0.0;
+};
+
+// Reduces a triangulated piece. The input must be an oriented 2-manifold with
+// or without border (each edge in one or two triangles, two triangles run an
+// edge in opposite directions, the triangles around a vertex form a single
+// fan), with finite coordinates and keys sorted ascending and unique.
+// Vertices used by no triangle are kept as they are.
+// Throws tetiso::Error for options outside their valid range and for input
+// that breaks these rules, naming the element (e.g. "edge (key a, key b) has
+// 3 triangles").
+Piece reduce(const Piece& in, const ReduceOptions& options = {}, ReduceReport* report = nullptr);
+
+} // namespace tetiso

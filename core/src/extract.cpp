@@ -1,0 +1,356 @@
+// Marching tetrahedra over one domain (paper, section "Isosurface generation
+// algorithm", steps 1-6), written as a few data-parallel passes over flat
+// arrays so that the same passes map onto Thrust/CUDA:
+//
+//   1. classify   node -> above (f >= level; equality counts as above, so the
+//                 classification of a node never depends on its domain);
+//   2. march      tetrahedron -> case; each crossing edge (lo, hi) of a cut
+//                 tetrahedron claims a slot in the bucket of its lower local
+//                 node (8 slots: a lattice node has 7 higher neighbours), and
+//                 the triangles are emitted as slot codes in tetrahedron order;
+//   3. number     per node, the filled slots sorted by the higher node give the
+//                 vertices, numbered by a prefix sum: vertex order is (lo, hi),
+//                 whatever the thread count, and for lattice domains that is
+//                 the order of the global edge keys;
+//   4. place      each vertex is interpolated from the end with the smaller
+//                 global id, keyed, and locked if its edge lies on an interface;
+//   5. connect    slot codes are replaced by vertex numbers.
+//
+// A node with more than 8 higher crossing neighbours (possible in unstructured
+// meshes, never in the lattice) sends the whole domain through a sort-based
+// numbering that gives the same result.
+#include "tetiso/extract.hpp"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <string>
+
+#include "tetiso/error.hpp"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace tetiso {
+namespace {
+
+constexpr int kEdgesOfTet[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+constexpr int kBucket = 8;
+constexpr std::int32_t kEmpty = -1;
+constexpr std::size_t kTetChunk = 1 << 15;
+
+// For each of the 16 above/below patterns of a tetrahedron: its crossing
+// edges (tet-edge numbers), in the order that makes the triangle, or the quad's
+// cycle, counter-clockwise seen from the side of increasing field for a
+// positively oriented tetrahedron.
+struct MarchCase {
+    int crossings = 0; // 0, 3 (one triangle) or 4 (a quad, two triangles)
+    std::array<int, 4> edge{};
+};
+
+std::array<MarchCase, 16> build_cases() {
+    // Reference tetrahedron with positive orientation; above nodes get +1,
+    // below -1, so crossings are edge midpoints and the above side is where
+    // the above nodes' centroid is.
+    constexpr double corner[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    std::array<MarchCase, 16> cases{};
+    for (int pattern = 1; pattern < 15; ++pattern) {
+        auto above = [&](int v) { return (pattern >> v) & 1; };
+        std::array<int, 4> cut{};
+        int count = 0;
+        for (int e = 0; e < 6; ++e)
+            if (above(kEdgesOfTet[e][0]) != above(kEdgesOfTet[e][1])) cut[count++] = e;
+        if (count == 4) {
+            // Order the quad as a cycle: consecutive edges share a tet node.
+            auto share = [](int e, int f) {
+                return kEdgesOfTet[e][0] == kEdgesOfTet[f][0] || kEdgesOfTet[e][0] == kEdgesOfTet[f][1] ||
+                       kEdgesOfTet[e][1] == kEdgesOfTet[f][0] || kEdgesOfTet[e][1] == kEdgesOfTet[f][1];
+            };
+            if (!share(cut[0], cut[1])) std::swap(cut[1], cut[2]);
+            if (!share(cut[1], cut[2])) std::swap(cut[2], cut[3]);
+        }
+        auto midpoint = [&](int e, int axis) {
+            return 0.5 * (corner[kEdgesOfTet[e][0]][axis] + corner[kEdgesOfTet[e][1]][axis]);
+        };
+        double a[3], b[3], normal[3], up[3] = {0, 0, 0};
+        for (int axis = 0; axis < 3; ++axis) {
+            a[axis] = midpoint(cut[1], axis) - midpoint(cut[0], axis);
+            b[axis] = midpoint(cut[2], axis) - midpoint(cut[0], axis);
+        }
+        normal[0] = a[1] * b[2] - a[2] * b[1];
+        normal[1] = a[2] * b[0] - a[0] * b[2];
+        normal[2] = a[0] * b[1] - a[1] * b[0];
+        for (int v = 0; v < 4; ++v)
+            for (int axis = 0; axis < 3; ++axis) up[axis] += (above(v) ? 1.0 : -1.0) * corner[v][axis];
+        if (normal[0] * up[0] + normal[1] * up[1] + normal[2] * up[2] < 0) std::reverse(cut.begin(), cut.begin() + count);
+        cases[static_cast<std::size_t>(pattern)] = MarchCase{count, cut};
+    }
+    return cases;
+}
+
+const std::array<MarchCase, 16> kCases = build_cases();
+
+struct EdgeEnds {
+    std::int32_t lo, hi;
+};
+
+// Finds or claims the slot of edge (lo, hi) in lo's bucket; returns its code
+// lo * kBucket + slot, or -1 if the bucket is full.
+template <bool Concurrent>
+std::int64_t claim(std::int32_t* slots, std::int32_t lo, std::int32_t hi) {
+    std::int32_t* bucket = slots + static_cast<std::int64_t>(lo) * kBucket;
+    for (int s = 0; s < kBucket; ++s) {
+        if constexpr (Concurrent) {
+            std::atomic_ref<std::int32_t> slot(bucket[s]);
+            std::int32_t seen = slot.load(std::memory_order_relaxed);
+            if (seen == kEmpty && slot.compare_exchange_strong(seen, hi, std::memory_order_relaxed)) seen = hi;
+            if (seen == hi) return static_cast<std::int64_t>(lo) * kBucket + s;
+        } else {
+            if (bucket[s] == kEmpty) bucket[s] = hi;
+            if (bucket[s] == hi) return static_cast<std::int64_t>(lo) * kBucket + s;
+        }
+    }
+    return -1;
+}
+
+// Triangles of one chunk of tetrahedra, as slot codes.
+struct ChunkOutput {
+    std::vector<std::int64_t> corners;
+    bool overflow = false;
+    std::int64_t bad_tet = -1;
+};
+
+template <bool Concurrent>
+void march_chunk(const Domain& domain, const std::uint8_t* above, std::int32_t* slots, std::size_t first,
+                 std::size_t last, ChunkOutput& out) {
+    const std::int32_t* tets = domain.tets.data();
+    const auto nodes = static_cast<std::uint32_t>(domain.node_count());
+    for (std::size_t t = first; t < last; ++t) {
+        const std::int32_t* v = tets + 4 * t;
+        if (static_cast<std::uint32_t>(v[0]) >= nodes || static_cast<std::uint32_t>(v[1]) >= nodes ||
+            static_cast<std::uint32_t>(v[2]) >= nodes || static_cast<std::uint32_t>(v[3]) >= nodes) {
+            out.bad_tet = static_cast<std::int64_t>(t);
+            return;
+        }
+        const unsigned pattern = above[v[0]] | (above[v[1]] << 1) | (above[v[2]] << 2) | (above[v[3]] << 3);
+        if (pattern == 0 || pattern == 15) continue;
+        const MarchCase& c = kCases[pattern];
+        std::int64_t code[4];
+        EdgeKey order[4]; // global key of each crossing, to split quads the same way in every domain
+        for (int k = 0; k < c.crossings; ++k) {
+            const std::int32_t a = v[kEdgesOfTet[c.edge[static_cast<std::size_t>(k)]][0]];
+            const std::int32_t b = v[kEdgesOfTet[c.edge[static_cast<std::size_t>(k)]][1]];
+            const std::int32_t lo = std::min(a, b), hi = std::max(a, b);
+            code[k] = claim<Concurrent>(slots, lo, hi);
+            if (code[k] < 0) {
+                out.overflow = true;
+                return;
+            }
+            if (c.crossings == 4)
+                order[k] = edge_key(domain.gid[static_cast<std::size_t>(a)], domain.gid[static_cast<std::size_t>(b)]);
+        }
+        if (c.crossings == 3) {
+            out.corners.insert(out.corners.end(), {code[0], code[1], code[2]});
+        } else {
+            // Split the quad along the diagonal through its crossing of the
+            // edge with the smallest global key: a combinatorial rule, the
+            // same in every domain, node numbering and backend.
+            const int first_min = static_cast<int>(std::min_element(order, order + 4) - order);
+            if (first_min % 2 == 0)
+                out.corners.insert(out.corners.end(), {code[0], code[1], code[2], code[0], code[2], code[3]});
+            else
+                out.corners.insert(out.corners.end(), {code[1], code[2], code[3], code[1], code[3], code[0]});
+        }
+    }
+}
+
+int resolve_threads(int requested) {
+#ifdef _OPENMP
+    return requested > 0 ? requested : omp_get_max_threads();
+#else
+    (void)requested;
+    return 1;
+#endif
+}
+
+std::string domain_name(const Domain& domain) { return "domain " + std::to_string(domain.id); }
+
+void check_domain(const Domain& domain) {
+    const std::size_t n = domain.node_count();
+    if (domain.x.size() != n || domain.y.size() != n || domain.z.size() != n || domain.f.size() != n ||
+        domain.interface.size() != n)
+        throw Error(domain_name(domain) + ": node arrays differ in length");
+    if (domain.tets.size() % 4 != 0) throw Error(domain_name(domain) + ": tetrahedron array is not a multiple of 4");
+    if (n > static_cast<std::size_t>(INT32_MAX) / kBucket)
+        throw Error(domain_name(domain) + ": too many nodes for one domain (" + std::to_string(n) + ")");
+}
+
+// Vertex placement and flags for the crossing of edge (lo, hi).
+void place_vertex(const Domain& domain, float level, std::int32_t lo, std::int32_t hi, Piece& piece,
+                  std::size_t vertex) {
+    // Interpolate from the end with the smaller global id, so that every
+    // domain holding this edge computes the same bits.
+    const bool lo_first = domain.gid[static_cast<std::size_t>(lo)] < domain.gid[static_cast<std::size_t>(hi)];
+    const auto a = static_cast<std::size_t>(lo_first ? lo : hi);
+    const auto b = static_cast<std::size_t>(lo_first ? hi : lo);
+    float t = (level - domain.f[a]) / (domain.f[b] - domain.f[a]);
+    t = std::clamp(t, 0.0f, 1.0f);
+    piece.x[vertex] = domain.x[a] + t * (domain.x[b] - domain.x[a]);
+    piece.y[vertex] = domain.y[a] + t * (domain.y[b] - domain.y[a]);
+    piece.z[vertex] = domain.z[a] + t * (domain.z[b] - domain.z[a]);
+    piece.key[vertex] = edge_key(domain.gid[a], domain.gid[b]);
+    piece.flags[vertex] =
+        (domain.interface[a] & domain.interface[b]) != 0 ? static_cast<std::uint8_t>(kLocked) : std::uint8_t{0};
+}
+
+void resize_vertices(Piece& piece, std::size_t n) {
+    piece.x.resize(n);
+    piece.y.resize(n);
+    piece.z.resize(n);
+    piece.key.resize(n);
+    piece.flags.resize(n);
+}
+
+// The fallback numbering: all crossing edges sorted and made unique. Used
+// only when a bucket overflows, so it favours simplicity over speed.
+Piece extract_by_sorting(const Domain& domain, float level, const std::vector<std::uint8_t>& above) {
+    std::vector<std::uint64_t> edges;
+    std::vector<std::uint64_t> corners;
+    for (std::size_t t = 0; t < domain.tet_count(); ++t) {
+        const std::int32_t* v = domain.tets.data() + 4 * t;
+        const unsigned pattern = above[static_cast<std::size_t>(v[0])] | (above[static_cast<std::size_t>(v[1])] << 1) |
+                                 (above[static_cast<std::size_t>(v[2])] << 2) |
+                                 (above[static_cast<std::size_t>(v[3])] << 3);
+        if (pattern == 0 || pattern == 15) continue;
+        const MarchCase& c = kCases[pattern];
+        std::uint64_t e[4];
+        EdgeKey order[4];
+        for (int k = 0; k < c.crossings; ++k) {
+            const std::int32_t a = v[kEdgesOfTet[c.edge[static_cast<std::size_t>(k)]][0]];
+            const std::int32_t b = v[kEdgesOfTet[c.edge[static_cast<std::size_t>(k)]][1]];
+            e[k] = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
+            order[k] = edge_key(domain.gid[static_cast<std::size_t>(a)], domain.gid[static_cast<std::size_t>(b)]);
+            edges.push_back(e[k]);
+        }
+        if (c.crossings == 3) {
+            corners.insert(corners.end(), {e[0], e[1], e[2]});
+        } else if ((std::min_element(order, order + 4) - order) % 2 == 0) {
+            corners.insert(corners.end(), {e[0], e[1], e[2], e[0], e[2], e[3]});
+        } else {
+            corners.insert(corners.end(), {e[1], e[2], e[3], e[1], e[3], e[0]});
+        }
+    }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    Piece piece;
+    resize_vertices(piece, edges.size());
+    for (std::size_t i = 0; i < edges.size(); ++i)
+        place_vertex(domain, level, static_cast<std::int32_t>(edges[i] >> 32),
+                     static_cast<std::int32_t>(edges[i] & 0xffffffffu), piece, i);
+    piece.triangles.resize(corners.size());
+    for (std::size_t i = 0; i < corners.size(); ++i)
+        piece.triangles[i] =
+            static_cast<std::int32_t>(std::lower_bound(edges.begin(), edges.end(), corners[i]) - edges.begin());
+    return piece;
+}
+
+} // namespace
+
+Piece extract(const Domain& domain, float level, const ExtractOptions& options) {
+    check_domain(domain);
+    const std::size_t nodes = domain.node_count();
+    const std::size_t tets = domain.tet_count();
+    const int threads = resolve_threads(options.threads);
+    if (!std::isfinite(level)) throw Error("isosurface level is not a finite number");
+
+    // 1. classify
+    std::vector<std::uint8_t> above(nodes);
+    std::int64_t bad_node = -1;
+#pragma omp parallel for num_threads(threads) schedule(static) reduction(max : bad_node)
+    for (std::int64_t v = 0; v < static_cast<std::int64_t>(nodes); ++v) {
+        const float value = domain.f[static_cast<std::size_t>(v)];
+        if (!std::isfinite(value)) bad_node = std::max(bad_node, v);
+        above[static_cast<std::size_t>(v)] = value >= level ? 1 : 0;
+    }
+    if (bad_node >= 0)
+        throw Error(domain_name(domain) + ": node " + std::to_string(domain.gid[static_cast<std::size_t>(bad_node)]) +
+                    " has a field value that is not finite");
+
+    // 2. march
+    std::vector<std::int32_t> slots(nodes * kBucket, kEmpty);
+    const std::size_t chunks = (tets + kTetChunk - 1) / kTetChunk;
+    std::vector<ChunkOutput> outputs(chunks);
+    if (threads == 1 || chunks == 1) {
+        for (std::size_t c = 0; c < chunks; ++c)
+            march_chunk<false>(domain, above.data(), slots.data(), c * kTetChunk, std::min(tets, (c + 1) * kTetChunk),
+                               outputs[c]);
+    } else {
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+        for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
+            const auto chunk = static_cast<std::size_t>(c);
+            march_chunk<true>(domain, above.data(), slots.data(), chunk * kTetChunk,
+                              std::min(tets, (chunk + 1) * kTetChunk), outputs[chunk]);
+        }
+    }
+    bool overflow = false;
+    for (const ChunkOutput& out : outputs) {
+        if (out.bad_tet >= 0)
+            throw Error(domain_name(domain) + ": tetrahedron " + std::to_string(out.bad_tet) +
+                        " refers to a node that does not exist");
+        overflow = overflow || out.overflow;
+    }
+    Piece piece;
+    if (overflow) {
+        piece = extract_by_sorting(domain, level, above);
+    } else {
+        // 3. number: vertices of node v are first[v] .. first[v] + filled(v) - 1
+        std::vector<std::int32_t> first(nodes + 1, 0);
+        for (std::size_t v = 0; v < nodes; ++v) {
+            const std::int32_t* bucket = slots.data() + v * kBucket;
+            int filled = 0;
+            while (filled < kBucket && bucket[filled] != kEmpty) ++filled;
+            first[v + 1] = first[v] + filled;
+        }
+        resize_vertices(piece, static_cast<std::size_t>(first[nodes]));
+
+        // 4. place; the bucket's slots are rewritten from higher node to vertex
+#pragma omp parallel for num_threads(threads) schedule(static, 4096)
+        for (std::int64_t node = 0; node < static_cast<std::int64_t>(nodes); ++node) {
+            const auto v = static_cast<std::size_t>(node);
+            const int filled = first[v + 1] - first[v];
+            if (filled == 0) continue;
+            std::int32_t* bucket = slots.data() + v * kBucket;
+            std::int32_t higher[kBucket];
+            std::copy(bucket, bucket + filled, higher);
+            for (int s = 0; s < filled; ++s) {
+                int rank = 0;
+                for (int r = 0; r < filled; ++r) rank += higher[r] < higher[s] ? 1 : 0;
+                const std::size_t vertex = static_cast<std::size_t>(first[v] + rank);
+                place_vertex(domain, level, static_cast<std::int32_t>(node), higher[s], piece, vertex);
+                bucket[s] = static_cast<std::int32_t>(vertex);
+            }
+        }
+
+        // 5. connect
+        std::vector<std::size_t> offset(chunks + 1, 0);
+        for (std::size_t c = 0; c < chunks; ++c) offset[c + 1] = offset[c] + outputs[c].corners.size();
+        piece.triangles.resize(offset[chunks]);
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1)
+        for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
+            const auto chunk = static_cast<std::size_t>(c);
+            std::int32_t* out = piece.triangles.data() + offset[chunk];
+            for (const std::int64_t code : outputs[chunk].corners) *out++ = slots[static_cast<std::size_t>(code)];
+            std::vector<std::int64_t>().swap(outputs[chunk].corners);
+        }
+    }
+    if (piece.triangles.size() / 3 > static_cast<std::size_t>(INT32_MAX))
+        throw Error(domain_name(domain) + ": surface too large for 32-bit indices");
+    // Lattice domains number nodes in global order, so this is a no-op there.
+    order_by_key(piece);
+    piece.domains = {domain.id};
+    return piece;
+}
+
+} // namespace tetiso

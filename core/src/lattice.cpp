@@ -1,0 +1,183 @@
+// The lattice test problem and its recursive coordinate bisection (paper,
+// section "Testing software implementation": a 5x5x5 cube, N^3 nodes,
+// split into 250, 125 or 63 domains).
+#include "tetiso/lattice.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <string>
+
+#include "tetiso/error.hpp"
+
+namespace tetiso {
+namespace {
+
+// Splits `box` (holding `count` domains) recursively and appends the leaves
+// in depth-first order, so domain ids follow space and do not depend on
+// anything but N and D.
+void bisect(const CellBox& box, int count, std::vector<CellBox>& leaves) {
+    if (count == 1) {
+        leaves.push_back(box);
+        return;
+    }
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+        if (box.hi[a] - box.lo[a] > box.hi[axis] - box.lo[axis]) axis = a;
+    const std::int64_t length = box.hi[axis] - box.lo[axis];
+    const std::int64_t slab = box.cells() / length; // cells in one slice across the axis
+
+    // Cut where the busier side's cells per domain is smallest, giving each
+    // side a domain count in proportion to its cells and at least one cell
+    // per domain on both sides (possible because count <= cells).
+    std::int64_t left_length = 1;
+    int left_count = 1;
+    double best = std::numeric_limits<double>::infinity();
+    for (std::int64_t cut = 1; cut < length; ++cut) {
+        const std::int64_t proportional = (static_cast<std::int64_t>(count) * cut + length / 2) / length;
+        const std::int64_t lowest = std::max<std::int64_t>(1, count - (length - cut) * slab);
+        const std::int64_t highest = std::min<std::int64_t>(cut * slab, count - 1);
+        const auto k = static_cast<int>(std::clamp(proportional, lowest, highest));
+        const double load = std::max(static_cast<double>(cut * slab) / k,
+                                     static_cast<double>((length - cut) * slab) / (count - k));
+        if (load < best) {
+            best = load;
+            left_length = cut;
+            left_count = k;
+        }
+    }
+
+    CellBox left = box, right = box;
+    left.hi[axis] = box.lo[axis] + left_length;
+    right.lo[axis] = left.hi[axis];
+    bisect(left, left_count, leaves);
+    bisect(right, count - left_count, leaves);
+}
+
+// Whether two closed boxes (in node coordinates) share a set of dimension >= 1,
+// i.e. at least one mesh edge.
+bool share_edges(const CellBox& a, const CellBox& b) {
+    int positive = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+        const std::int64_t lo = std::max(a.lo[axis], b.lo[axis]);
+        const std::int64_t hi = std::min(a.hi[axis], b.hi[axis]);
+        if (lo > hi) return false;
+        if (lo < hi) ++positive;
+    }
+    return positive >= 1;
+}
+
+} // namespace
+
+Lattice::Lattice(std::int64_t n) : n_(n) {
+    if (n < 2) throw Error("lattice size must be at least 2 nodes per axis, got " + std::to_string(n));
+    if (n * n * n - 1 > kMaxGlobalId)
+        throw Error("lattice size " + std::to_string(n) + " has more nodes than an edge key can address");
+}
+
+Decomposition::Decomposition(const Lattice& lattice, int d) : lattice_(lattice) {
+    if (d < 1) throw Error("domain count must be at least 1, got " + std::to_string(d));
+    if (d > lattice.cell_count())
+        throw Error("cannot split " + std::to_string(lattice.cell_count()) + " cells into " +
+                    std::to_string(d) + " domains");
+    const std::int64_t cells = lattice.n() - 1;
+    bisect(CellBox{{0, 0, 0}, {cells, cells, cells}}, d, boxes_);
+
+    neighbours_.resize(boxes_.size());
+    for (std::size_t a = 0; a < boxes_.size(); ++a)
+        for (std::size_t b = a + 1; b < boxes_.size(); ++b)
+            if (share_edges(boxes_[a], boxes_[b])) {
+                neighbours_[a].push_back(static_cast<int>(b));
+                neighbours_[b].push_back(static_cast<int>(a));
+            }
+    for (auto& list : neighbours_) std::sort(list.begin(), list.end());
+}
+
+std::vector<int> Decomposition::domains_of_edge(GlobalId a, GlobalId b) const {
+    const auto ia = lattice_.node_index(a), ib = lattice_.node_index(b);
+    std::vector<int> result;
+    // Boxes are few (~10^3) and this runs for interface vertices only.
+    for (std::size_t d = 0; d < boxes_.size(); ++d) {
+        const CellBox& box = boxes_[d];
+        bool inside = true;
+        for (int axis = 0; axis < 3 && inside; ++axis)
+            inside = std::min(ia[axis], ib[axis]) >= box.lo[axis] && std::max(ia[axis], ib[axis]) <= box.hi[axis];
+        if (inside) result.push_back(static_cast<int>(d));
+    }
+    return result;
+}
+
+Domain Decomposition::make_domain(int domain, const Field& field) const {
+    const CellBox& box = boxes_.at(static_cast<std::size_t>(domain));
+    const std::int64_t n = lattice_.n();
+    const std::int64_t nx = box.hi[0] - box.lo[0], ny = box.hi[1] - box.lo[1], nz = box.hi[2] - box.lo[2];
+    const std::int64_t px = nx + 1, py = ny + 1, pz = nz + 1; // nodes per axis
+    const std::size_t nodes = static_cast<std::size_t>(px * py * pz);
+    if (nodes > static_cast<std::size_t>(INT32_MAX))
+        throw Error("domain " + std::to_string(domain) + " has too many nodes for 32-bit local indices");
+
+    Domain out;
+    out.id = domain;
+    out.x.resize(nodes);
+    out.y.resize(nodes);
+    out.z.resize(nodes);
+    out.f.resize(nodes);
+    out.gid.resize(nodes);
+    out.interface.resize(nodes);
+
+    // Interface faces of the box: those not on the outer boundary of the cube.
+    const std::uint8_t open_faces = static_cast<std::uint8_t>(
+        (box.lo[0] > 0 ? 1u : 0u) | (box.hi[0] < n - 1 ? 2u : 0u) | (box.lo[1] > 0 ? 4u : 0u) |
+        (box.hi[1] < n - 1 ? 8u : 0u) | (box.lo[2] > 0 ? 16u : 0u) | (box.hi[2] < n - 1 ? 32u : 0u));
+
+    std::vector<double> xs(static_cast<std::size_t>(px)), ys(xs.size()), zs(xs.size());
+    std::vector<float> row(xs.size());
+    for (std::int64_t k = 0; k < pz; ++k) {
+        for (std::int64_t j = 0; j < py; ++j) {
+            const std::size_t first = static_cast<std::size_t>(px * (j + py * k));
+            const std::int64_t gj = box.lo[1] + j, gk = box.lo[2] + k;
+            for (std::int64_t i = 0; i < px; ++i) {
+                const std::int64_t gi = box.lo[0] + i;
+                const std::size_t v = first + static_cast<std::size_t>(i);
+                xs[static_cast<std::size_t>(i)] = lattice_.coordinate(gi);
+                ys[static_cast<std::size_t>(i)] = lattice_.coordinate(gj);
+                zs[static_cast<std::size_t>(i)] = lattice_.coordinate(gk);
+                out.x[v] = static_cast<float>(xs[static_cast<std::size_t>(i)]);
+                out.y[v] = static_cast<float>(ys[static_cast<std::size_t>(i)]);
+                out.z[v] = static_cast<float>(zs[static_cast<std::size_t>(i)]);
+                out.gid[v] = lattice_.node_id(gi, gj, gk);
+                const unsigned faces = (i == 0 ? 1u : 0u) | (i == nx ? 2u : 0u) | (j == 0 ? 4u : 0u) |
+                                       (j == ny ? 8u : 0u) | (k == 0 ? 16u : 0u) | (k == nz ? 32u : 0u);
+                out.interface[v] = static_cast<std::uint8_t>(faces & open_faces);
+            }
+            field.evaluate(xs.data(), ys.data(), zs.data(), xs.size(), out.f.data() + first);
+        }
+    }
+
+    // Six tetrahedra per cell, one per ordering of the axes: each walks from
+    // the cell's lowest corner to its highest along one monotone path. The
+    // split is the same in every cell, so shared faces match. An ordering of
+    // odd parity gives a negatively oriented walk; swapping its middle two
+    // vertices makes it positive.
+    static constexpr int kOrders[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
+    const std::int64_t stride[3] = {1, px, px * py};
+    out.tets.resize(static_cast<std::size_t>(nx * ny * nz) * 24);
+    std::int32_t* tet = out.tets.data();
+    for (std::int64_t k = 0; k < nz; ++k)
+        for (std::int64_t j = 0; j < ny; ++j)
+            for (std::int64_t i = 0; i < nx; ++i) {
+                const std::int64_t origin = i + px * (j + py * k);
+                for (int t = 0; t < 6; ++t) {
+                    const std::int64_t v1 = origin + stride[kOrders[t][0]];
+                    const std::int64_t v2 = v1 + stride[kOrders[t][1]];
+                    const bool odd = t >= 3;
+                    tet[0] = static_cast<std::int32_t>(origin);
+                    tet[1] = static_cast<std::int32_t>(odd ? v2 : v1);
+                    tet[2] = static_cast<std::int32_t>(odd ? v1 : v2);
+                    tet[3] = static_cast<std::int32_t>(origin + stride[0] + stride[1] + stride[2]);
+                    tet += 4;
+                }
+            }
+    return out;
+}
+
+} // namespace tetiso

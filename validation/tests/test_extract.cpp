@@ -1,0 +1,214 @@
+// Marching tetrahedra: closed surfaces of the right topology and size, every
+// vertex on its mesh edge at the level, pieces of any decomposition fitting
+// together exactly, and output independent of the thread count.
+#include <gtest/gtest.h>
+
+#include <numbers>
+#include <numeric>
+#include <random>
+
+#include "test_support.hpp"
+#include "tetiso/check.hpp"
+#include "tetiso/error.hpp"
+
+namespace tetiso {
+namespace {
+
+using test::lattice_surface;
+
+TEST(Extract, SphereIsOneClosedOrientedGenusZeroComponentOfTheRightArea) {
+    const Piece sphere = lattice_surface(100, 1, "sphere");
+    const TopologyReport report = check_topology(sphere);
+    EXPECT_EQ(report.components, 1);
+    EXPECT_EQ(report.euler, 2);
+    EXPECT_TRUE(report.closed);
+    EXPECT_TRUE(report.manifold);
+    EXPECT_TRUE(report.oriented);
+    EXPECT_EQ(report.non_manifold_edges, 0);
+    const double radius = 2.0;
+    EXPECT_NEAR(test::area(sphere), 4 * std::numbers::pi * radius * radius, 0.01 * 4 * std::numbers::pi * radius * radius);
+    // Normals towards increasing distance from the centre: outwards.
+    EXPECT_NEAR(test::signed_volume(sphere), 4.0 / 3.0 * std::numbers::pi * radius * radius * radius,
+                0.01 * 4.0 / 3.0 * std::numbers::pi * radius * radius * radius);
+}
+
+TEST(Extract, TorusHasEulerCharacteristicZero) {
+    const Piece torus = lattice_surface(60, 1, "torus");
+    const TopologyReport report = check_topology(torus);
+    EXPECT_EQ(report.components, 1);
+    EXPECT_EQ(report.euler, 0);
+    EXPECT_TRUE(report.closed);
+    EXPECT_TRUE(report.manifold);
+    EXPECT_TRUE(report.oriented);
+    ASSERT_EQ(report.per_component.size(), 1u);
+    EXPECT_EQ(report.per_component[0].genus, 1);
+}
+
+TEST(Extract, OpenSurfacesAreManifoldAndOriented) {
+    for (const char* field : {"gyroid", "paper"}) {
+        const TopologyReport report = check_topology(lattice_surface(40, 1, field));
+        EXPECT_TRUE(report.manifold) << field;
+        EXPECT_TRUE(report.oriented) << field;
+        EXPECT_GT(report.boundary_loops, 0) << field << " is cut open by the cube's faces";
+    }
+}
+
+TEST(Extract, EveryVertexLiesOnItsEdgeWhereTheLinearFieldEqualsTheLevel) {
+    const Lattice lattice(30);
+    const auto field = make_field("paper");
+    const Piece surface = lattice_surface(30, 1, "paper");
+    ASSERT_GT(surface.vertex_count(), 0u);
+    for (std::size_t v = 0; v < surface.vertex_count(); ++v) {
+        const GlobalId ends[2] = {edge_key_low(surface.key[v]), edge_key_high(surface.key[v])};
+        double p[2][3];
+        float f[2];
+        for (int e = 0; e < 2; ++e) {
+            const auto ijk = lattice.node_index(ends[e]);
+            for (int axis = 0; axis < 3; ++axis) p[e][axis] = lattice.coordinate(ijk[static_cast<std::size_t>(axis)]);
+            field->evaluate(&p[e][0], &p[e][1], &p[e][2], 1, &f[e]);
+        }
+        // A mesh edge joins lattice neighbours, and the field crosses the level on it.
+        for (int axis = 0; axis < 3; ++axis) ASSERT_LE(std::abs(p[1][axis] - p[0][axis]), lattice.spacing() * 1.0001);
+        ASSERT_NE(f[0] >= 0.5f, f[1] >= 0.5f);
+        const double q[3] = {surface.x[v], surface.y[v], surface.z[v]};
+        const double d[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+        const double length2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        const double t = ((q[0] - p[0][0]) * d[0] + (q[1] - p[0][1]) * d[1] + (q[2] - p[0][2]) * d[2]) / length2;
+        ASSERT_GE(t, -1e-6);
+        ASSERT_LE(t, 1 + 1e-6);
+        double off = 0;
+        for (int axis = 0; axis < 3; ++axis) off += std::pow(q[axis] - (p[0][axis] + t * d[axis]), 2);
+        ASSERT_LE(std::sqrt(off), 1e-5) << "vertex " << v << " is off its edge";
+        const double interpolated = f[0] + t * (f[1] - f[0]);
+        ASSERT_NEAR(interpolated, 0.5, 1e-4 * std::abs(f[1] - f[0]) + 1e-5) << "vertex " << v;
+    }
+}
+
+class Decomposed : public ::testing::TestWithParam<int> {};
+
+TEST_P(Decomposed, PiecesCombineToTheSingleDomainSurfaceExactly) {
+    const Piece whole = lattice_surface(41, 1, "paper");
+    const Piece combined = lattice_surface(41, GetParam(), "paper");
+    EXPECT_TRUE(test::same_surface(whole, combined));
+    EXPECT_EQ(whole.triangle_count(), combined.triangle_count());
+}
+
+INSTANTIATE_TEST_SUITE_P(Domains, Decomposed, ::testing::Values(2, 8, 27, 63));
+
+TEST(Extract, LockedVerticesAreExactlyThoseOnSharedEdges) {
+    const Lattice lattice(25);
+    const Decomposition decomposition(lattice, 8);
+    const auto field = make_field("gyroid");
+    std::size_t locked = 0;
+    for (int d = 0; d < decomposition.domain_count(); ++d) {
+        const Piece piece = extract(decomposition.make_domain(d, *field), 0.0f);
+        EXPECT_EQ(piece.domains, std::vector<int>{d});
+        for (std::size_t v = 0; v < piece.vertex_count(); ++v) {
+            const auto holders = decomposition.domains_of_edge(edge_key_low(piece.key[v]), edge_key_high(piece.key[v]));
+            ASSERT_EQ((piece.flags[v] & kLocked) != 0, holders.size() > 1) << "domain " << d << " vertex " << v;
+            locked += piece.flags[v] & kLocked;
+        }
+    }
+    EXPECT_GT(locked, 0u);
+    const Piece combined = lattice_surface(25, 8, "gyroid");
+    EXPECT_TRUE(std::none_of(combined.flags.begin(), combined.flags.end(), [](std::uint8_t f) { return f & kLocked; }));
+}
+
+TEST(Extract, SurfaceThroughMeshNodesIsConsistentAndManifold) {
+    // x = 2.5 at level 0 passes through a whole plane of nodes (i = 5 of 11):
+    // every domain must classify them alike.
+    const Piece whole = lattice_surface(11, 1, "x-2.5", 0.0);
+    for (const int domains : {2, 8, 27, 63}) EXPECT_TRUE(test::same_surface(whole, lattice_surface(11, domains, "x-2.5", 0.0)));
+    const TopologyReport report = check_topology(whole);
+    EXPECT_EQ(report.non_manifold_edges, 0);
+    EXPECT_EQ(report.non_manifold_vertices, 0);
+    EXPECT_TRUE(report.oriented);
+    EXPECT_EQ(report.components, 1);
+    EXPECT_EQ(report.boundary_loops, 1);
+    EXPECT_EQ(report.euler, 1); // a disk
+    for (std::size_t v = 0; v < whole.vertex_count(); ++v) ASSERT_EQ(whole.x[v], 2.5f);
+}
+
+TEST(Extract, OutputDoesNotDependOnThreadCount) {
+    const Lattice lattice(60);
+    const Decomposition one(lattice, 1);
+    const Domain domain = one.make_domain(0, *make_field("paper"));
+    const Piece serial = extract(domain, 0.5f, ExtractOptions{1});
+    const Piece parallel = extract(domain, 0.5f, ExtractOptions{2});
+    EXPECT_EQ(serial.key, parallel.key);
+    EXPECT_TRUE(test::same_bits(serial.x, parallel.x));
+    EXPECT_EQ(serial.triangles, parallel.triangles) << "triangle order must not depend on threads either";
+}
+
+// Renumbers a domain's nodes by `order` (new index -> old index).
+Domain renumbered(const Domain& d, const std::vector<std::int32_t>& order) {
+    Domain out = d;
+    std::vector<std::int32_t> rank(order.size());
+    for (std::size_t i = 0; i < order.size(); ++i) {
+        const auto old = static_cast<std::size_t>(order[i]);
+        rank[old] = static_cast<std::int32_t>(i);
+        out.x[i] = d.x[old];
+        out.y[i] = d.y[old];
+        out.z[i] = d.z[old];
+        out.f[i] = d.f[old];
+        out.gid[i] = d.gid[old];
+        out.interface[i] = d.interface[old];
+    }
+    for (auto& v : out.tets) v = rank[static_cast<std::size_t>(v)];
+    return out;
+}
+
+TEST(Extract, UnstructuredNodeOrderGivesTheSameSurface) {
+    // A general mesh numbers its nodes in any order; the piece must not care,
+    // whether the buckets suffice or overflow into the sorting path.
+    const Lattice lattice(16);
+    const Decomposition one(lattice, 1);
+    const Domain domain = one.make_domain(0, *make_field("gyroid"));
+    const Piece reference = extract(domain, 0.0f);
+
+    std::vector<std::int32_t> order(domain.node_count());
+    std::iota(order.begin(), order.end(), 0);
+    std::mt19937 random(7);
+    std::shuffle(order.begin(), order.end(), random);
+    EXPECT_TRUE(test::same_surface(reference, extract(renumbered(domain, order), 0.0f)));
+
+    // A tiny sphere around one node, numbered first: all 14 of its edges
+    // cross and go into one bucket of 8.
+    const auto dot = make_field("sqrt((x-2)^2+(y-2)^2+(z-2)^2)");
+    const Domain small = one.make_domain(0, *dot);
+    const float level = static_cast<float>(0.5 * lattice.spacing());
+    const auto centre = static_cast<std::int32_t>(
+        std::min_element(small.f.begin(), small.f.end()) - small.f.begin());
+    std::iota(order.begin(), order.end(), 0);
+    std::swap(order[0], order[static_cast<std::size_t>(centre)]);
+    const Piece plain = extract(small, level);
+    const Piece overflowed = extract(renumbered(small, order), level);
+    EXPECT_EQ(plain.vertex_count(), 14u);
+    EXPECT_TRUE(test::same_surface(plain, overflowed));
+}
+
+TEST(Extract, LevelOutsideTheRangeGivesAnEmptySurface) {
+    const Piece empty = lattice_surface(10, 2, "sphere", 100.0);
+    EXPECT_EQ(empty.triangle_count(), 0u);
+    EXPECT_EQ(empty.vertex_count(), 0u);
+}
+
+TEST(Extract, BadDomainsAreRefusedWithAClearError) {
+    const Lattice lattice(4);
+    const Decomposition one(lattice, 1);
+    Domain domain = one.make_domain(0, *make_field("paper"));
+    Domain nan = domain;
+    nan.f[5] = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_THROW(extract(nan, 0.5f), Error);
+    Domain dangling = domain;
+    dangling.tets[7] = static_cast<std::int32_t>(domain.node_count());
+    try {
+        extract(dangling, 0.5f);
+        FAIL() << "a tetrahedron with a missing node was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("tetrahedron 1"), std::string::npos) << e.what();
+    }
+}
+
+} // namespace
+} // namespace tetiso

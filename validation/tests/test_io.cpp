@@ -1,0 +1,116 @@
+// Surface files: exact round trips, other tools' PLY, and clear errors with
+// nothing left behind for anything malformed.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "test_support.hpp"
+#include "tetiso/error.hpp"
+#include "tetiso/io.hpp"
+
+namespace tetiso {
+namespace {
+
+namespace fs = std::filesystem;
+
+class Files : public ::testing::Test {
+protected:
+    void SetUp() override {
+        directory_ = fs::temp_directory_path() / ("tetiso_io_" + std::to_string(::getpid()) + "_" +
+                                                  ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(directory_);
+    }
+    void TearDown() override { fs::remove_all(directory_); }
+    fs::path at(const std::string& name) const { return directory_ / name; }
+    void write_text(const fs::path& path, const std::string& text) const { std::ofstream(path, std::ios::binary) << text; }
+    std::size_t files() const { return static_cast<std::size_t>(std::distance(fs::directory_iterator(directory_), fs::directory_iterator())); }
+    std::string error_of(const fs::path& path) const {
+        try {
+            read_piece(path);
+        } catch (const Error& e) {
+            return e.what();
+        }
+        return "";
+    }
+    fs::path directory_;
+};
+
+TEST_F(Files, RoundTripsAreExact) {
+    // Two domains, so some vertices carry the locked flag.
+    const Lattice lattice(20);
+    const Decomposition two(lattice, 2);
+    const Piece piece = extract(two.make_domain(1, *make_field("gyroid")), 0.0f);
+    ASSERT_GT(std::count(piece.flags.begin(), piece.flags.end(), kLocked), 0);
+    for (const char* name : {"s.ply", "s.vtp", "S.PLY"}) {
+        write_piece(piece, at(name));
+        const Piece back = read_piece(at(name));
+        EXPECT_EQ(back.key, piece.key) << name;
+        EXPECT_EQ(back.flags, piece.flags) << name;
+        EXPECT_TRUE(test::same_bits(back.x, piece.x) && test::same_bits(back.y, piece.y) && test::same_bits(back.z, piece.z)) << name;
+        EXPECT_EQ(back.triangles, piece.triangles) << name;
+    }
+    const Piece empty;
+    write_piece(empty, at("empty.vtp"));
+    write_piece(empty, at("empty.ply"));
+    EXPECT_EQ(read_piece(at("empty.vtp")).triangle_count(), 0u);
+    EXPECT_EQ(read_piece(at("empty.ply")).vertex_count(), 0u);
+}
+
+TEST_F(Files, ReadsAsciiPlyFromOtherTools) {
+    write_text(at("quad.ply"), "ply\nformat ascii 1.0\ncomment hand made\nelement vertex 4\n"
+                               "property double x\nproperty double y\nproperty double z\nproperty uchar red\n"
+                               "element face 1\nproperty list uchar uint vertex_index\nend_header\n"
+                               "0 0 0 1\n1 0 0 2\n1 1 0 3\n0 1 0 4\n4 0 1 2 3\n");
+    const Piece quad = read_piece(at("quad.ply"));
+    ASSERT_EQ(quad.vertex_count(), 4u);
+    EXPECT_EQ(quad.key, (std::vector<EdgeKey>{0, 1, 2, 3}));
+    EXPECT_EQ(quad.triangles, (std::vector<std::int32_t>{0, 1, 2, 0, 2, 3}));
+    EXPECT_EQ(quad.x[2], 1.0f);
+}
+
+TEST_F(Files, MalformedFilesGetErrorsNamingTheFile) {
+    const Lattice lattice(8);
+    const Decomposition one(lattice, 1);
+    write_piece(extract(one.make_domain(0, *make_field("sphere")), 2.0f), at("good.ply"));
+    std::ifstream in(at("good.ply"), std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+
+    write_text(at("cut.ply"), bytes.substr(0, bytes.size() - 7));
+    EXPECT_NE(error_of(at("cut.ply")).find("cut.ply: file ends inside face"), std::string::npos) << error_of(at("cut.ply"));
+
+    std::string huge = bytes;
+    huge.replace(huge.find("element face"), std::string("element face").size(), "element face 99999999999 ");
+    write_text(at("huge.ply"), huge);
+    EXPECT_NE(error_of(at("huge.ply")).find("more than the file can hold"), std::string::npos) << error_of(at("huge.ply"));
+
+    write_text(at("index.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                                "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
+    EXPECT_NE(error_of(at("index.ply")).find("refers to vertex 7"), std::string::npos) << error_of(at("index.ply"));
+
+    write_text(at("nan.ply"), "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                              "property float z\nend_header\nnan 0 0\n");
+    EXPECT_FALSE(error_of(at("nan.ply")).empty());
+
+    write_text(at("text.vtp"), "<VTKFile type=\"UnstructuredGrid\"></VTKFile>");
+    EXPECT_NE(error_of(at("text.vtp")).find("not a VTK XML PolyData"), std::string::npos);
+    write_text(at("junk.ply"), "hello");
+    EXPECT_NE(error_of(at("junk.ply")).find("junk.ply"), std::string::npos);
+    EXPECT_NE(error_of(at("missing.ply")).find("cannot open"), std::string::npos);
+    EXPECT_NE(error_of(at("mesh.obj")).find("unknown surface format"), std::string::npos);
+}
+
+TEST_F(Files, FailedWritesLeaveNothingBehind) {
+    const Piece piece = test::lattice_surface(8, 1, "sphere");
+    EXPECT_THROW(write_piece(piece, at("no/such/dir/s.ply")), Error);
+    EXPECT_THROW(write_piece(piece, at("s.stl")), Error);
+    // An existing file survives a failed overwrite: the write goes to a
+    // temporary name first, and here it cannot be renamed over a directory.
+    fs::create_directory(at("taken.ply"));
+    EXPECT_THROW(write_piece(piece, at("taken.ply")), Error);
+    EXPECT_TRUE(fs::is_directory(at("taken.ply")));
+    EXPECT_EQ(files(), 1u) << "no temporary file may be left";
+}
+
+} // namespace
+} // namespace tetiso

@@ -1,0 +1,90 @@
+// Small helpers shared by the test programs: building lattice surfaces and
+// comparing pieces exactly.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "tetiso/extract.hpp"
+#include "tetiso/field.hpp"
+#include "tetiso/lattice.hpp"
+#include "tetiso/seam.hpp"
+
+namespace tetiso::test {
+
+// Extracts every domain of an N-lattice split into D domains and merges the
+// pieces by key, as `tetiso extract` does.
+inline Piece lattice_surface(std::int64_t n, int domains, const std::string& field_name,
+                             std::optional<double> level = std::nullopt, int threads = 1) {
+    const Lattice lattice(n);
+    const Decomposition decomposition(lattice, domains);
+    const auto field = make_field(field_name);
+    const auto value = static_cast<float>(level.value_or(field->default_level()));
+    std::vector<Piece> pieces;
+    for (int d = 0; d < decomposition.domain_count(); ++d)
+        pieces.push_back(extract(decomposition.make_domain(d, *field), value, ExtractOptions{threads}));
+    Piece surface = merge_all(std::move(pieces));
+    unlock_settled(surface, [&](GlobalId a, GlobalId b) { return decomposition.domains_of_edge(a, b); });
+    return surface;
+}
+
+// Triangles as vertex-key triples rotated to start at the smallest key,
+// sorted: equal lists mean the same triangles with the same orientation.
+inline std::vector<std::array<EdgeKey, 3>> canonical_triangles(const Piece& piece) {
+    std::vector<std::array<EdgeKey, 3>> out(piece.triangle_count());
+    for (std::size_t t = 0; t < out.size(); ++t) {
+        std::array<EdgeKey, 3> k{piece.key[static_cast<std::size_t>(piece.triangles[3 * t])],
+                                 piece.key[static_cast<std::size_t>(piece.triangles[3 * t + 1])],
+                                 piece.key[static_cast<std::size_t>(piece.triangles[3 * t + 2])]};
+        std::rotate(k.begin(), std::min_element(k.begin(), k.end()), k.end());
+        out[t] = k;
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+inline bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](float p, float q) {
+               return std::bit_cast<std::uint32_t>(p) == std::bit_cast<std::uint32_t>(q);
+           });
+}
+
+// Same vertices (keys, bit-identical positions, flags) and same triangles up
+// to their order.
+inline bool same_surface(const Piece& a, const Piece& b) {
+    return a.key == b.key && same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.z, b.z) &&
+           a.flags == b.flags && canonical_triangles(a) == canonical_triangles(b);
+}
+
+inline double area(const Piece& p) {
+    double sum = 0;
+    for (std::size_t t = 0; t < p.triangle_count(); ++t) {
+        const auto a = static_cast<std::size_t>(p.triangles[3 * t]), b = static_cast<std::size_t>(p.triangles[3 * t + 1]),
+                   c = static_cast<std::size_t>(p.triangles[3 * t + 2]);
+        const double u[3] = {p.x[b] - p.x[a], p.y[b] - p.y[a], p.z[b] - p.z[a]};
+        const double v[3] = {p.x[c] - p.x[a], p.y[c] - p.y[a], p.z[c] - p.z[a]};
+        const double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        sum += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    }
+    return sum;
+}
+
+// Signed enclosed volume (divergence theorem): positive when normals point out.
+inline double signed_volume(const Piece& p) {
+    double sum = 0;
+    for (std::size_t t = 0; t < p.triangle_count(); ++t) {
+        const auto a = static_cast<std::size_t>(p.triangles[3 * t]), b = static_cast<std::size_t>(p.triangles[3 * t + 1]),
+                   c = static_cast<std::size_t>(p.triangles[3 * t + 2]);
+        const double ax = p.x[a] - 2.5, ay = p.y[a] - 2.5, az = p.z[a] - 2.5;
+        const double bx = p.x[b] - 2.5, by = p.y[b] - 2.5, bz = p.z[b] - 2.5;
+        const double cx = p.x[c] - 2.5, cy = p.y[c] - 2.5, cz = p.z[c] - 2.5;
+        sum += (ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx)) / 6.0;
+    }
+    return sum;
+}
+
+} // namespace tetiso::test
