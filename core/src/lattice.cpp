@@ -4,7 +4,6 @@
 #include "tetiso/lattice.hpp"
 
 #include <algorithm>
-#include <limits>
 #include <string>
 
 #include "tetiso/error.hpp"
@@ -26,25 +25,16 @@ void bisect(const CellBox& box, int count, std::vector<CellBox>& leaves) {
     const std::int64_t length = box.hi[axis] - box.lo[axis];
     const std::int64_t slab = box.cells() / length; // cells in one slice across the axis
 
-    // Cut where the busier side's cells per domain is smallest, giving each
-    // side a domain count in proportion to its cells and at least one cell
-    // per domain on both sides (possible because count <= cells).
-    std::int64_t left_length = 1;
-    int left_count = 1;
-    double best = std::numeric_limits<double>::infinity();
-    for (std::int64_t cut = 1; cut < length; ++cut) {
-        const std::int64_t proportional = (static_cast<std::int64_t>(count) * cut + length / 2) / length;
-        const std::int64_t lowest = std::max<std::int64_t>(1, count - (length - cut) * slab);
-        const std::int64_t highest = std::min<std::int64_t>(cut * slab, count - 1);
-        const auto k = static_cast<int>(std::clamp(proportional, lowest, highest));
-        const double load = std::max(static_cast<double>(cut * slab) / k,
-                                     static_cast<double>((length - cut) * slab) / (count - k));
-        if (load < best) {
-            best = load;
-            left_length = cut;
-            left_count = k;
-        }
-    }
+    // Halve the domain count, cut the cells in the same proportion, then
+    // re-balance the counts to the slices actually cut, keeping at least one
+    // cell per domain on both sides (possible because count <= cells).
+    const int half = count / 2;
+    const std::int64_t left_length =
+        std::clamp<std::int64_t>((length * half + count / 2) / count, 1, length - 1);
+    const std::int64_t proportional = (static_cast<std::int64_t>(count) * left_length + length / 2) / length;
+    const std::int64_t lowest = std::max<std::int64_t>(1, count - (length - left_length) * slab);
+    const std::int64_t highest = std::min<std::int64_t>(left_length * slab, count - 1);
+    const int left_count = static_cast<int>(std::clamp(proportional, lowest, highest));
 
     CellBox left = box, right = box;
     left.hi[axis] = box.lo[axis] + left_length;
