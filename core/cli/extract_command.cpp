@@ -96,7 +96,7 @@ void add_extract_command(CLI::App& app, Command& run) {
     CLI::App* cmd = app.add_subcommand("extract", "Extract the isosurface of the lattice test problem");
     cmd->add_option("--lattice", args->lattice, "Nodes per axis of the N x N x N lattice on [0,5]^3")
         ->required()
-        ->check(CLI::Range(std::int64_t{2}, std::int64_t{1626}));
+        ->check(CLI::Range(std::int64_t{2}, std::int64_t{1625}));
     cmd->add_option("--domains", args->domains, "Number of domains (recursive coordinate bisection)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--field", args->field,

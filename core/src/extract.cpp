@@ -97,19 +97,20 @@ struct EdgeEnds {
 };
 
 // Finds or claims the slot of edge (lo, hi) in lo's bucket; returns its code
-// lo * kBucket + slot, or -1 if the bucket is full.
+// lo * kBucket + slot (check_domain keeps it within int32), or -1 if the
+// bucket is full.
 template <bool Concurrent>
-std::int64_t claim(std::int32_t* slots, std::int32_t lo, std::int32_t hi) {
+std::int32_t claim(std::int32_t* slots, std::int32_t lo, std::int32_t hi) {
     std::int32_t* bucket = slots + static_cast<std::int64_t>(lo) * kBucket;
     for (int s = 0; s < kBucket; ++s) {
         if constexpr (Concurrent) {
             std::atomic_ref<std::int32_t> slot(bucket[s]);
             std::int32_t seen = slot.load(std::memory_order_relaxed);
             if (seen == kEmpty && slot.compare_exchange_strong(seen, hi, std::memory_order_relaxed)) seen = hi;
-            if (seen == hi) return static_cast<std::int64_t>(lo) * kBucket + s;
+            if (seen == hi) return lo * kBucket + s;
         } else {
             if (bucket[s] == kEmpty) bucket[s] = hi;
-            if (bucket[s] == hi) return static_cast<std::int64_t>(lo) * kBucket + s;
+            if (bucket[s] == hi) return lo * kBucket + s;
         }
     }
     return -1;
@@ -117,7 +118,7 @@ std::int64_t claim(std::int32_t* slots, std::int32_t lo, std::int32_t hi) {
 
 // Triangles of one chunk of tetrahedra, as slot codes.
 struct ChunkOutput {
-    std::vector<std::int64_t> corners;
+    std::vector<std::int32_t> corners;
     bool overflow = false;
     std::int64_t bad_tet = -1;
 };
@@ -127,6 +128,7 @@ void march_chunk(const Domain& domain, const std::uint8_t* above, std::int32_t* 
                  std::size_t last, ChunkOutput& out) {
     const std::int32_t* tets = domain.tets.data();
     const auto nodes = static_cast<std::uint32_t>(domain.node_count());
+    out.corners.reserve((last - first) / 2); // about the most a chunk of a smooth surface emits
     for (std::size_t t = first; t < last; ++t) {
         const std::int32_t* v = tets + 4 * t;
         if (static_cast<std::uint32_t>(v[0]) >= nodes || static_cast<std::uint32_t>(v[1]) >= nodes ||
@@ -137,7 +139,7 @@ void march_chunk(const Domain& domain, const std::uint8_t* above, std::int32_t* 
         const unsigned pattern = above[v[0]] | (above[v[1]] << 1) | (above[v[2]] << 2) | (above[v[3]] << 3);
         if (pattern == 0 || pattern == 15) continue;
         const MarchCase& c = kCases[pattern];
-        std::int64_t code[4];
+        std::int32_t code[4];
         EdgeKey order[4]; // global key of each crossing, to split quads the same way in every domain
         for (int k = 0; k < c.crossings; ++k) {
             const std::int32_t a = v[kEdgesOfTet[c.edge[static_cast<std::size_t>(k)]][0]];
@@ -341,8 +343,8 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
         for (std::int64_t c = 0; c < static_cast<std::int64_t>(chunks); ++c) {
             const auto chunk = static_cast<std::size_t>(c);
             std::int32_t* out = piece.triangles.data() + offset[chunk];
-            for (const std::int64_t code : outputs[chunk].corners) *out++ = slots[static_cast<std::size_t>(code)];
-            std::vector<std::int64_t>().swap(outputs[chunk].corners);
+            for (const std::int32_t code : outputs[chunk].corners) *out++ = slots[static_cast<std::size_t>(code)];
+            std::vector<std::int32_t>().swap(outputs[chunk].corners);
         }
     }
     if (piece.triangles.size() / 3 > static_cast<std::size_t>(INT32_MAX))

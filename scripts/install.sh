@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Installs what tetiso needs on Debian 12 (as root), then configures and
+# builds it in build/. Sourced by main.sh and test.sh; safe to run again.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(
+  build-essential cmake ninja-build pkg-config python3 python3-matplotlib
+  libmuparser-dev libcli11-dev nlohmann-json3-dev    # core: expressions, CLI, reports
+  libopenmpi-dev openmpi-bin                         # the MPI job
+  libgtest-dev libgmock-dev libbenchmark-dev         # tests and benchmarks
+  libcgal-dev libmeshoptimizer-dev                   # checker's self-intersections, reduction baseline
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release ${TETISO_CMAKE_ARGS:-}
+cmake --build build -j "$(nproc)"

@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# End-to-end checks of the `tetiso` command: what a user sees for good and
+# bad arguments. Usage: test_cli.sh PATH/TO/tetiso
+set -u
+tetiso=$1
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+failures=0
+passed=0
+
+# expect STATUS DESCRIPTION -- COMMAND...: the exit status, one-line stderr on
+# error, and no file left in the output directory when it fails.
+expect() {
+    local status=$1 what=$2
+    shift 3
+    rm -rf "$work/out" && mkdir -p "$work/out"
+    "$@" >"$work/stdout" 2>"$work/stderr"
+    local got=$?
+    local problem=""
+    [ "$got" -eq "$status" ] || problem="exit status $got, expected $status"
+    if [ -z "$problem" ] && [ "$status" -ne 0 ]; then
+        [ "$(wc -l <"$work/stderr")" -eq 1 ] || problem="stderr is not one line: $(cat "$work/stderr")"
+        [ -z "$(ls -A "$work/out")" ] || problem="left files behind: $(ls -A "$work/out")"
+    fi
+    if [ -n "$problem" ]; then
+        echo "FAIL: $what: $problem"
+        sed 's/^/  | /' "$work/stderr"
+        failures=$((failures + 1))
+    else
+        passed=$((passed + 1))
+    fi
+}
+
+out=$work/out
+expect 0 "help" -- "$tetiso" --help
+expect 0 "extract help" -- "$tetiso" extract --help
+expect 0 "extract writes a vtp" -- "$tetiso" extract --lattice 12 --domains 3 --field sphere -o "$out/s.vtp" --report "$out/r.json"
+expect 2 "no subcommand" -- "$tetiso"
+expect 2 "unknown flag" -- "$tetiso" extract --lattice 10 --bogus -o "$out/s.ply"
+expect 2 "unknown field" -- "$tetiso" extract --lattice 10 --field "sphere(" -o "$out/s.ply"
+expect 2 "expression with an unknown variable" -- "$tetiso" extract --lattice 10 --field "x+w" -o "$out/s.ply"
+expect 2 "N < 2" -- "$tetiso" extract --lattice 1 -o "$out/s.ply"
+expect 2 "D < 1" -- "$tetiso" extract --lattice 10 --domains 0 -o "$out/s.ply"
+expect 2 "more domains than cells" -- "$tetiso" extract --lattice 3 --domains 9 -o "$out/s.ply"
+expect 2 "unwritable output directory" -- "$tetiso" extract --lattice 10 -o "$out/missing/s.ply"
+expect 2 "unknown output format" -- "$tetiso" extract --lattice 10 -o "$out/s.stl"
+expect 2 "check of a missing file" -- "$tetiso" check "$out/nothing.ply"
+
+# A level outside the range: an empty surface, said so on stderr, exit 0.
+"$tetiso" extract --lattice 10 --field sphere --level 50 -o "$work/empty.ply" 2>"$work/stderr"
+if [ $? -eq 0 ] && grep -q "outside the field's range" "$work/stderr" && [ -s "$work/empty.ply" ]; then
+    passed=$((passed + 1))
+else
+    echo "FAIL: level outside the range"; failures=$((failures + 1))
+fi
+
+# The report holds what the issue asks for, and the surface checks out.
+"$tetiso" extract --lattice 30 --domains 8 --field sphere -o "$work/s.ply" --report "$work/r.json" &&
+python3 - "$work/r.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+for key in ("tets", "domains", "vertices", "triangles", "seconds"):
+    assert key in r, key
+assert r["domains"] == 8 and r["tets"] == 6 * 29 ** 3 and r["triangles"] > 0
+assert all(v >= 0 for v in r["seconds"].values())
+PY
+if [ $? -eq 0 ]; then passed=$((passed + 1)); else echo "FAIL: report contents"; failures=$((failures + 1)); fi
+
+"$tetiso" check "$work/s.ply" >"$work/check.json" && python3 - "$work/check.json" <<'PY'
+import json, sys
+c = json.load(open(sys.argv[1]))["topology"]
+assert c["components"] == 1 and c["euler"] == 2 and c["closed"] and c["manifold"] and c["oriented"], c
+PY
+if [ $? -eq 0 ]; then passed=$((passed + 1)); else echo "FAIL: tetiso check of an extracted sphere"; failures=$((failures + 1)); fi
+
+# The same file for any thread count.
+"$tetiso" extract --lattice 40 --threads 1 -o "$work/t1.ply" && "$tetiso" extract --lattice 40 --threads 2 -o "$work/t2.ply"
+if cmp -s "$work/t1.ply" "$work/t2.ply"; then passed=$((passed + 1)); else echo "FAIL: output depends on threads"; failures=$((failures + 1)); fi
+
+echo "$passed passed, $failures failed"
+[ "$failures" -eq 0 ]
