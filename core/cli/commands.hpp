@@ -15,6 +15,7 @@ using Command = std::function<void()>;
 
 void add_extract_command(CLI::App& app, Command& run);
 void add_check_command(CLI::App& app, Command& run);
+void add_run_command(CLI::App& app, Command& run);
 
 // Fails early, before any work, if `path` cannot be created: its directory
 // must exist and be writable, and its extension known to `kind`.

@@ -13,11 +13,13 @@ namespace {
 
 // Splits `box` (holding `count` domains) recursively and appends the leaves
 // in depth-first order, so domain ids follow space and do not depend on
-// anything but N and D.
-void bisect(const CellBox& box, int count, std::vector<CellBox>& leaves) {
+// anything but N and D. Returns the index of the tree node made for `box`.
+int bisect(const CellBox& box, int count, std::vector<CellBox>& leaves, std::vector<BisectionNode>& tree) {
+    const int node = static_cast<int>(tree.size());
+    tree.push_back(BisectionNode{static_cast<int>(leaves.size()), count, -1, -1});
     if (count == 1) {
         leaves.push_back(box);
-        return;
+        return node;
     }
     int axis = 0;
     for (int a = 1; a < 3; ++a)
@@ -39,8 +41,11 @@ void bisect(const CellBox& box, int count, std::vector<CellBox>& leaves) {
     CellBox left = box, right = box;
     left.hi[axis] = box.lo[axis] + left_length;
     right.lo[axis] = left.hi[axis];
-    bisect(left, left_count, leaves);
-    bisect(right, count - left_count, leaves);
+    const int left_node = bisect(left, left_count, leaves, tree);
+    const int right_node = bisect(right, count - left_count, leaves, tree);
+    tree[static_cast<std::size_t>(node)].left = left_node;
+    tree[static_cast<std::size_t>(node)].right = right_node;
+    return node;
 }
 
 // Whether two closed boxes (in node coordinates) share a set of dimension >= 1,
@@ -70,7 +75,7 @@ Decomposition::Decomposition(const Lattice& lattice, int d) : lattice_(lattice) 
         throw Error("cannot split " + std::to_string(lattice.cell_count()) + " cells into " +
                     std::to_string(d) + " domains");
     const std::int64_t cells = lattice.n() - 1;
-    bisect(CellBox{{0, 0, 0}, {cells, cells, cells}}, d, boxes_);
+    bisect(CellBox{{0, 0, 0}, {cells, cells, cells}}, d, boxes_, tree_);
 
     neighbours_.resize(boxes_.size());
     for (std::size_t a = 0; a < boxes_.size(); ++a)

@@ -105,3 +105,199 @@ std::size_t unlock_settled(Piece& piece, const EdgeDomains& domains_of_edge) {
 }
 
 } // namespace tetiso
+
+namespace tetiso {
+namespace {
+
+// Triangles around each vertex, as compressed rows.
+struct Incidence {
+    std::vector<std::int32_t> first; // vertex v's triangles are list[first[v] .. first[v+1])
+    std::vector<std::int32_t> list;
+};
+
+Incidence incidence(const Piece& piece) {
+    Incidence out;
+    out.first.assign(piece.vertex_count() + 1, 0);
+    for (const std::int32_t v : piece.triangles) ++out.first[static_cast<std::size_t>(v) + 1];
+    for (std::size_t v = 0; v < piece.vertex_count(); ++v) out.first[v + 1] += out.first[v];
+    out.list.resize(piece.triangles.size());
+    std::vector<std::int32_t> cursor(out.first.begin(), out.first.end() - 1);
+    for (std::size_t c = 0; c < piece.triangles.size(); ++c)
+        out.list[static_cast<std::size_t>(cursor[static_cast<std::size_t>(piece.triangles[c])]++)] =
+            static_cast<std::int32_t>(c / 3);
+    return out;
+}
+
+// Vertices of the region that would have more than one fan in it (more than
+// two region-border edges): the sub-piece must be a manifold for reduce().
+std::vector<std::int32_t> pinched_vertices(const Piece& piece, const std::vector<std::int32_t>& region) {
+    std::vector<std::uint64_t> edges;
+    edges.reserve(region.size() * 3);
+    for (const std::int32_t t : region)
+        for (int k = 0; k < 3; ++k) {
+            const auto a = static_cast<std::uint32_t>(piece.triangles[3 * static_cast<std::size_t>(t) + static_cast<std::size_t>(k)]);
+            const auto b = static_cast<std::uint32_t>(piece.triangles[3 * static_cast<std::size_t>(t) + static_cast<std::size_t>((k + 1) % 3)]);
+            edges.push_back((static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b));
+        }
+    std::sort(edges.begin(), edges.end());
+    std::vector<std::int32_t> ends;
+    for (std::size_t i = 0; i < edges.size();) {
+        std::size_t j = i;
+        while (j < edges.size() && edges[j] == edges[i]) ++j;
+        if (j - i == 1) {
+            ends.push_back(static_cast<std::int32_t>(edges[i] >> 32));
+            ends.push_back(static_cast<std::int32_t>(edges[i] & 0xffffffffu));
+        }
+        i = j;
+    }
+    std::sort(ends.begin(), ends.end());
+    std::vector<std::int32_t> pinched;
+    for (std::size_t i = 0; i < ends.size();) {
+        std::size_t j = i;
+        while (j < ends.size() && ends[j] == ends[i]) ++j;
+        if (j - i > 2) pinched.push_back(ends[i]);
+        i = j;
+    }
+    return pinched;
+}
+
+} // namespace
+
+Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, const SeamOptions& options,
+                  SeamReport* report) {
+    const std::size_t n = piece.vertex_count();
+    const Incidence around = incidence(piece);
+
+    // Vertices within `rings` edges of the seed, by breadth-first search.
+    std::vector<std::uint8_t> near(n, 0);
+    std::vector<std::int32_t> frontier;
+    for (std::size_t v = 0; v < n; ++v)
+        if (seed[v]) {
+            near[v] = 1;
+            frontier.push_back(static_cast<std::int32_t>(v));
+        }
+    std::vector<std::int32_t> reached = frontier;
+    for (int ring = 0; ring < options.rings && !frontier.empty(); ++ring) {
+        std::vector<std::int32_t> next;
+        for (const std::int32_t v : frontier)
+            for (std::int32_t i = around.first[static_cast<std::size_t>(v)]; i < around.first[static_cast<std::size_t>(v) + 1]; ++i)
+                for (int k = 0; k < 3; ++k) {
+                    const std::int32_t w = piece.triangles[3 * static_cast<std::size_t>(around.list[static_cast<std::size_t>(i)]) + static_cast<std::size_t>(k)];
+                    if (!near[static_cast<std::size_t>(w)]) {
+                        near[static_cast<std::size_t>(w)] = 1;
+                        next.push_back(w);
+                    }
+                }
+        reached.insert(reached.end(), next.begin(), next.end());
+        frontier = std::move(next);
+    }
+
+    // The region: every triangle around a reached vertex, grown over pinched
+    // rim vertices until it is a manifold with border.
+    std::vector<std::uint8_t> in_region(piece.triangle_count(), 0);
+    std::vector<std::int32_t> region;
+    auto take_umbrella = [&](std::int32_t v) {
+        for (std::int32_t i = around.first[static_cast<std::size_t>(v)]; i < around.first[static_cast<std::size_t>(v) + 1]; ++i) {
+            const std::int32_t t = around.list[static_cast<std::size_t>(i)];
+            if (!in_region[static_cast<std::size_t>(t)]) {
+                in_region[static_cast<std::size_t>(t)] = 1;
+                region.push_back(t);
+            }
+        }
+    };
+    for (const std::int32_t v : reached) take_umbrella(v);
+    for (std::vector<std::int32_t> pinched = pinched_vertices(piece, region); !pinched.empty();
+         pinched = pinched_vertices(piece, region))
+        for (const std::int32_t v : pinched) take_umbrella(v);
+    std::sort(region.begin(), region.end());
+
+    // The sub-piece, numbered in the piece's (key) order; its rim is locked so
+    // that it still fits the rest of the piece after reduction.
+    std::vector<std::int32_t> local(n, -1);
+    std::vector<std::int32_t> members;
+    for (const std::int32_t t : region)
+        for (int k = 0; k < 3; ++k) {
+            const std::int32_t v = piece.triangles[3 * static_cast<std::size_t>(t) + static_cast<std::size_t>(k)];
+            if (local[static_cast<std::size_t>(v)] < 0) {
+                local[static_cast<std::size_t>(v)] = 0;
+                members.push_back(v);
+            }
+        }
+    std::sort(members.begin(), members.end());
+    Piece sub;
+    sub.domains = piece.domains;
+    for (std::size_t i = 0; i < members.size(); ++i) {
+        const auto v = static_cast<std::size_t>(members[i]);
+        local[v] = static_cast<std::int32_t>(i);
+        bool rim = false;
+        for (std::int32_t j = around.first[v]; j < around.first[v + 1] && !rim; ++j)
+            rim = !in_region[static_cast<std::size_t>(around.list[static_cast<std::size_t>(j)])];
+        sub.x.push_back(piece.x[v]);
+        sub.y.push_back(piece.y[v]);
+        sub.z.push_back(piece.z[v]);
+        sub.key.push_back(piece.key[v]);
+        sub.flags.push_back(static_cast<std::uint8_t>(piece.flags[v] | (rim ? kLocked : 0)));
+    }
+    for (const std::int32_t t : region)
+        for (int k = 0; k < 3; ++k)
+            sub.triangles.push_back(local[static_cast<std::size_t>(piece.triangles[3 * static_cast<std::size_t>(t) + static_cast<std::size_t>(k)])]);
+
+    ReduceReport reduce_report;
+    const Piece reduced = reduce(sub, options.reduce_options, &reduce_report);
+    if (report) {
+        report->region_triangles = region.size();
+        report->reduce = reduce_report;
+    }
+
+    // Splice: vertices of the sub-piece that the reduction removed are dropped,
+    // those it kept take their new positions; both lists are in key order.
+    std::vector<std::uint8_t> keep(n, 1);
+    std::vector<std::int32_t> from_reduced(reduced.vertex_count(), -1);
+    std::size_t r = 0;
+    for (const std::int32_t v : members) {
+        const auto vi = static_cast<std::size_t>(v);
+        if (r < reduced.vertex_count() && reduced.key[r] == piece.key[vi]) {
+            from_reduced[r++] = v;
+        } else {
+            keep[vi] = 0;
+        }
+    }
+    std::vector<std::int32_t> renumber(n, -1);
+    Piece out;
+    out.domains = piece.domains;
+    for (std::size_t v = 0, r2 = 0; v < n; ++v) {
+        if (!keep[v]) continue;
+        renumber[v] = static_cast<std::int32_t>(out.key.size());
+        const bool moved = local[v] >= 0;
+        if (moved) {
+            while (reduced.key[r2] != piece.key[v]) ++r2;
+        }
+        out.x.push_back(moved ? reduced.x[r2] : piece.x[v]);
+        out.y.push_back(moved ? reduced.y[r2] : piece.y[v]);
+        out.z.push_back(moved ? reduced.z[r2] : piece.z[v]);
+        out.key.push_back(piece.key[v]);
+        out.flags.push_back(piece.flags[v]);
+    }
+    out.triangles.reserve(piece.triangles.size());
+    for (std::size_t t = 0; t < piece.triangle_count(); ++t)
+        if (!in_region[t])
+            for (int k = 0; k < 3; ++k)
+                out.triangles.push_back(renumber[static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>(k)])]);
+    for (const std::int32_t v : reduced.triangles)
+        out.triangles.push_back(renumber[static_cast<std::size_t>(from_reduced[static_cast<std::size_t>(v)])]);
+    return out;
+}
+
+Piece seam(const Piece& a, const Piece& b, const EdgeDomains& domains_of_edge, const SeamOptions& options,
+           SeamReport* report) {
+    Piece merged = merge_by_key(a, b);
+    std::vector<std::uint8_t> seed(merged.flags);
+    const std::size_t unlocked = unlock_settled(merged, domains_of_edge);
+    if (report) *report = SeamReport{unlocked, 0, {}};
+    if (!options.reduce || unlocked == 0) return merged;
+    for (std::size_t v = 0; v < seed.size(); ++v)
+        seed[v] = (seed[v] & kLocked) && !(merged.flags[v] & kLocked) ? 1 : 0;
+    return reduce_near(merged, seed, options, report);
+}
+
+} // namespace tetiso

@@ -51,6 +51,17 @@ private:
     std::int64_t n_;
 };
 
+// One node of the bisection tree. It covers domains [first, first + count);
+// a leaf (count 1) is one domain, an inner node's children are the two boxes
+// its cut made. Every node covers a box, so the children of a node are
+// adjacent across the cut and their union is convex.
+struct BisectionNode {
+    int first = 0;
+    int count = 1;
+    int left = -1;  // index of the child node, -1 for a leaf
+    int right = -1;
+};
+
 // Recursive coordinate bisection of the lattice's cells into D boxes: each
 // split cuts the longest side of a box, dividing the domain count and the
 // cells in proportion, so domains differ in size by about one slab of cells.
@@ -69,6 +80,9 @@ public:
         return neighbours_.at(static_cast<std::size_t>(domain));
     }
 
+    // The bisection tree, root first; children come after their parent.
+    const std::vector<BisectionNode>& tree() const { return tree_; }
+
     // Domains whose closed box contains the mesh edge between two nodes, sorted.
     std::vector<int> domains_of_edge(GlobalId a, GlobalId b) const;
 
@@ -78,6 +92,7 @@ public:
 private:
     const Lattice& lattice_;
     std::vector<CellBox> boxes_;
+    std::vector<BisectionNode> tree_;
     std::vector<std::vector<int>> neighbours_;
 };
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "tetiso/mesh.hpp"
+#include "tetiso/reduce.hpp"
 
 namespace tetiso {
 
@@ -27,5 +28,33 @@ using EdgeDomains = std::function<std::vector<int>(GlobalId, GlobalId)>;
 // `piece.domains`: its neighbourhood is complete, so reduction may touch it.
 // Returns the number of vertices unlocked.
 std::size_t unlock_settled(Piece& piece, const EdgeDomains& domains_of_edge);
+
+struct SeamOptions {
+    bool reduce = true;
+    ReduceOptions reduce_options;
+    // How far from the seam the reduction reaches, in edges. The rest of the
+    // piece was reduced before and is left exactly as it is.
+    int rings = 3;
+};
+
+struct SeamReport {
+    std::size_t vertices_unlocked = 0;
+    std::size_t region_triangles = 0; // triangles handed to the reduction
+    ReduceReport reduce;
+};
+
+// The seaming task of the paper: merge two pieces by key, unlock what the
+// merge settled, and reduce again near the seam only. The reduction sees the
+// triangles within `rings` edges of the unlocked vertices, with the region's
+// rim locked, and its result is spliced back by key; its cost is that of the
+// seam's neighbourhood (plus a few linear passes to find it), not the piece's.
+// The result depends only on the two pieces, never on who seams them or when.
+Piece seam(const Piece& a, const Piece& b, const EdgeDomains& domains_of_edge, const SeamOptions& options = {},
+           SeamReport* report = nullptr);
+
+// Reduces `piece` near the vertices marked in `seed` (see seam); exposed for
+// tests and for callers that unlock vertices by other means.
+Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, const SeamOptions& options,
+                  SeamReport* report = nullptr);
 
 } // namespace tetiso

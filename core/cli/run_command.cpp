@@ -1,0 +1,137 @@
+// `tetiso run`: the main job. Under mpirun, rank 0 controls and the other
+// ranks work; without it, one process runs every task.
+#include <iostream>
+#include <unistd.h>
+
+#include "commands.hpp"
+#include "tetiso/error.hpp"
+#include "tetiso/io.hpp"
+#include "tetiso/schedule.hpp"
+
+namespace tetiso::cli {
+namespace {
+
+struct RunArguments {
+    JobConfig job;
+    std::filesystem::path output;
+    std::filesystem::path report;
+    bool quiet = false;
+};
+
+nlohmann::json task_json(const TaskRecord& t) {
+    return {{"task", t.task},
+            {"kind", t.kind == TaskKind::domain ? "domain" : "seam"},
+            {"first_domain", t.first_domain},
+            {"domain_count", t.domain_count},
+            {"rank", t.rank},
+            {"start", t.start},
+            {"end", t.end},
+            {"triangles_in", t.triangles_in},
+            {"triangles_out", t.triangles_out}};
+}
+
+void run_job(const RunArguments& args) {
+    const double start = now_seconds();
+    MpiSession mpi;
+    const Job job(args.job); // validates on every rank alike
+
+    // Only rank 0 writes; the others learn whether it can.
+    std::string output_problem;
+    if (mpi.rank() == 0) {
+        try {
+            surface_format(args.output);
+            require_writable(args.output);
+            if (!args.report.empty()) require_writable(args.report);
+        } catch (const Error& e) {
+            output_problem = e.what();
+        }
+    }
+    if (!mpi.broadcast(output_problem.empty())) {
+        if (mpi.rank() == 0) throw Error(output_problem);
+        throw JobStopped();
+    }
+
+    double last_report = 0;
+    const bool show = !args.quiet && mpi.rank() == 0;
+    const Progress progress = [&](int done, int total, double elapsed) {
+        if (!show || elapsed < 2.0 || (elapsed - last_report < 1.0 && done < total)) return;
+        last_report = elapsed;
+        std::cerr << "tetiso: " << done << "/" << total << " tasks, " << elapsed << " s" << std::endl;
+    };
+    std::optional<JobResult> result = mpi.size() > 1 ? run_mpi(job, progress) : run_local(job, progress);
+    if (!result) return; // a worker
+
+    const double t_write = now_seconds();
+    write_piece(result->surface, args.output);
+    const double write_seconds = now_seconds() - t_write;
+    if (args.report.empty()) return;
+
+    std::uint64_t raw = 0;
+    nlohmann::json tasks = nlohmann::json::array();
+    for (const TaskRecord& t : result->tasks) {
+        if (t.kind == TaskKind::domain) raw += t.triangles_in;
+        tasks.push_back(task_json(t));
+    }
+    const JobConfig& c = args.job;
+    nlohmann::json report = {
+        {"command", "run"},
+        {"lattice", c.lattice},
+        {"domains", c.domains},
+        {"field", c.field},
+        {"level", job.level()},
+        {"reduce", c.reduce},
+        {"phi", c.reduce_options.phi},
+        {"max_error", c.reduce ? c.max_error_spacings * job.lattice().spacing() : 0.0},
+        {"ranks", mpi.size()},
+        {"workers", std::max(1, mpi.size() - 1)},
+        {"threads", c.threads},
+        {"nodes", job.lattice().node_count()},
+        {"tets", job.lattice().tet_count()},
+        {"raw_triangles", raw},
+        {"vertices", result->surface.vertex_count()},
+        {"triangles", result->surface.triangle_count()},
+        {"output", args.output.string()},
+        {"seconds", {{"job", result->seconds}, {"write", write_seconds}, {"total", now_seconds() - start}}},
+        {"tasks", tasks},
+    };
+    write_report(report, args.report);
+}
+
+} // namespace
+
+void add_run_command(CLI::App& app, Command& run) {
+    auto args = std::make_shared<RunArguments>();
+    CLI::App* cmd = app.add_subcommand(
+        "run", "The main job: extract and reduce every domain, seam pairwise until one surface remains "
+               "(under mpirun: rank 0 controls, the others work)");
+    JobConfig& job = args->job;
+    cmd->add_option("--lattice", job.lattice, "Nodes per axis of the N x N x N lattice on [0,5]^3")
+        ->required()
+        ->check(CLI::Range(std::int64_t{2}, std::int64_t{1625}));
+    cmd->add_option("--domains", job.domains, "Number of domains (recursive coordinate bisection)")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    cmd->add_option("--field", job.field,
+                    std::string("Built-in field (") + builtin_field_names() + ") or an expression in x, y, z")
+        ->capture_default_str();
+    cmd->add_option_function<double>(
+        "--level", [args](double level) { args->job.level = level; },
+        "Isosurface level (default: the field's own, 0.5 for paper)");
+    cmd->add_option("--phi", job.reduce_options.phi, "Reduction threshold PHI* in (0, 1]: higher keeps more")
+        ->check(CLI::Range(1e-9, 1.0))
+        ->capture_default_str();
+    cmd->add_option("--max-error", job.max_error_spacings,
+                    "Bound on the distance to the raw surface, in lattice spacings (0: none)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    cmd->add_flag("!--no-reduce", job.reduce, "Extract and seam only");
+    cmd->add_option("--threads", job.threads, "Threads inside each task (0 = all cores)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    cmd->add_option("-o,--output", args->output, "Output surface, .ply or .vtp")->required();
+    cmd->add_option("--report", args->report, "Write a JSON report (totals and one record per task) here");
+    cmd->add_flag("--quiet", args->quiet, "No progress lines on stderr");
+    cmd->callback([&run, args] { run = [args] { run_job(*args); }; });
+}
+
+} // namespace tetiso::cli

@@ -1,0 +1,151 @@
+// The job: every domain extracted and reduced, the pieces seamed pairwise and
+// reduced near each seam until one surface remains (paper, sections
+// "Problem overview" and "Load balancing and job scheduling").
+//
+// The tasks form the bisection tree of the decomposition: a leaf extracts and
+// reduces one domain, an inner node seams the pieces of its two children,
+// which are adjacent boxes. Tasks are handed out dynamically to whichever
+// worker is free, but which pieces are seamed together is fixed by the tree,
+// and every task's result depends only on its inputs, so the final surface is
+// bit-identical for any number of workers and any timing.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tetiso/field.hpp"
+#include "tetiso/lattice.hpp"
+#include "tetiso/mesh.hpp"
+#include "tetiso/reduce.hpp"
+
+namespace tetiso {
+
+struct JobConfig {
+    std::int64_t lattice = 0;        // N of the N^3 lattice
+    int domains = 1;                 // D
+    std::string field = "paper";     // built-in name or expression
+    std::optional<double> level;     // default: the field's own
+    bool reduce = true;              // --no-reduce turns every reduction off
+    ReduceOptions reduce_options;    // phi and friends; threads is set per task
+    // Bound on the reduction's distance to the raw surface, in lattice
+    // spacings h (sets reduce_options.max_error); <= 0 leaves it as given.
+    double max_error_spacings = 0.25;
+    int seam_rings = 3;              // reach of the reduction after a seam
+    int threads = 1;                 // threads inside one task
+};
+
+enum class TaskKind : std::int32_t { domain = 0, seam = 1 };
+
+struct TaskRecord {
+    std::int32_t task = 0;
+    TaskKind kind = TaskKind::domain;
+    std::int32_t first_domain = 0;   // the task covers domains [first, first + count)
+    std::int32_t domain_count = 1;
+    std::int32_t rank = 0;           // who ran it
+    double start = 0, end = 0;       // seconds since the job started, on rank 0's clock
+    std::uint64_t triangles_in = 0;  // extracted triangles, or the two pieces' sum
+    std::uint64_t triangles_out = 0;
+};
+
+struct JobResult {
+    Piece surface;
+    std::vector<TaskRecord> tasks;   // in completion order
+    int ranks = 1;
+    double seconds = 0;
+};
+
+// Called by the controlling process after each task: tasks done, total, and
+// seconds since the start.
+using Progress = std::function<void(int, int, double)>;
+
+// Everything a rank needs to run tasks: lattice, decomposition, field.
+// Building it validates the configuration (throws tetiso::Error).
+class Job {
+public:
+    explicit Job(const JobConfig& config);
+
+    const JobConfig& config() const { return config_; }
+    const Lattice& lattice() const { return *lattice_; }
+    const Decomposition& decomposition() const { return *decomposition_; }
+    float level() const { return level_; }
+    int task_count() const { return static_cast<int>(decomposition_->tree().size()); }
+    const BisectionNode& node(int task) const { return decomposition_->tree()[static_cast<std::size_t>(task)]; }
+    TaskKind kind(int task) const { return node(task).count == 1 ? TaskKind::domain : TaskKind::seam; }
+    std::string describe(int task) const;
+
+    // Runs one task. A domain task takes no pieces; a seam task takes its two
+    // children's. Fills triangles_in / triangles_out of `record`.
+    Piece execute(int task, const Piece* left, const Piece* right, TaskRecord& record) const;
+
+private:
+    JobConfig config_;
+    std::unique_ptr<Lattice> lattice_;
+    std::unique_ptr<Decomposition> decomposition_;
+    std::unique_ptr<Field> field_;
+    float level_ = 0;
+    ReduceOptions reduce_options_;
+};
+
+// Which task to hand out next: a seam as soon as both its pieces exist (it
+// frees memory and is on the way to the root), else the lowest domain, so
+// subtrees complete early. Only timing depends on this order, never output.
+class TaskQueue {
+public:
+    explicit TaskQueue(const Job& job);
+    bool has_ready() const { return !ready_.empty(); }
+    int pop();
+    // Marks `task` done; its parent becomes ready once both children are.
+    void complete(int task);
+    bool finished() const { return done_root_; }
+
+private:
+    std::vector<int> parent_;
+    std::vector<int> children_done_;
+    std::set<std::pair<int, int>> ready_; // (priority class, task)
+    bool done_root_ = false;
+};
+
+// Runs every task in this process, in TaskQueue order.
+JobResult run_local(const Job& job, const Progress& progress);
+
+// Whether this process was started by an MPI launcher with several ranks
+// (and tetiso was built with MPI).
+bool launched_with_mpi();
+
+// Runs the job over MPI_COMM_WORLD: rank 0 controls, the others work. The
+// caller has initialised MPI. Returns the result on rank 0, nullopt on
+// workers. A task that throws ends the job on every rank: rank 0 throws
+// tetiso::Error naming the task and rank, workers throw JobStopped.
+std::optional<JobResult> run_mpi(const Job& job, const Progress& progress);
+
+// MPI for the lifetime of the object, when launched_with_mpi(); otherwise a
+// single rank of one. Finalises on destruction, also when unwinding from an
+// error, so that every rank leaves cleanly.
+class MpiSession {
+public:
+    MpiSession();
+    ~MpiSession();
+    MpiSession(const MpiSession&) = delete;
+    MpiSession& operator=(const MpiSession&) = delete;
+    int rank() const { return rank_; }
+    int size() const { return size_; }
+    // Rank 0's value, on every rank.
+    bool broadcast(bool value) const;
+
+private:
+    bool active_ = false;
+    int rank_ = 0, size_ = 1;
+};
+
+// Thrown on worker ranks when the job ended because of a failure elsewhere;
+// rank 0 has reported it.
+struct JobStopped : std::runtime_error {
+    JobStopped() : std::runtime_error("job stopped") {}
+};
+
+} // namespace tetiso

@@ -1,0 +1,136 @@
+// The job's tasks and their order (paper, section "Load balancing and job
+// scheduling"), shared by the single-process and the MPI runs.
+#include "tetiso/schedule.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+
+#include "tetiso/error.hpp"
+#include "tetiso/extract.hpp"
+#include "tetiso/seam.hpp"
+
+namespace tetiso {
+
+Job::Job(const JobConfig& config) : config_(config) {
+    lattice_ = std::make_unique<Lattice>(config.lattice);
+    decomposition_ = std::make_unique<Decomposition>(*lattice_, config.domains);
+    field_ = make_field(config.field);
+    const double level = config.level.value_or(field_->default_level());
+    if (!std::isfinite(level)) throw Error("isosurface level is not a finite number");
+    level_ = static_cast<float>(level);
+    reduce_options_ = config.reduce_options;
+    reduce_options_.threads = config.threads;
+    if (config.max_error_spacings > 0) reduce_options_.max_error = config.max_error_spacings * lattice_->spacing();
+}
+
+std::string Job::describe(int task) const {
+    const BisectionNode& n = node(task);
+    if (n.count == 1) return "domain " + std::to_string(n.first);
+    return "seam of domains " + std::to_string(n.first) + "-" + std::to_string(n.first + n.count - 1);
+}
+
+Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& record) const {
+    const BisectionNode& n = node(task);
+    record.task = task;
+    record.kind = kind(task);
+    record.first_domain = n.first;
+    record.domain_count = n.count;
+    if (n.count == 1) {
+        const Domain domain = decomposition_->make_domain(n.first, *field_);
+        Piece piece = extract(domain, level_, ExtractOptions{config_.threads});
+        record.triangles_in = piece.triangle_count();
+        if (config_.reduce) piece = reduce(piece, reduce_options_);
+        record.triangles_out = piece.triangle_count();
+        return piece;
+    }
+    if (!left || !right) throw Error("seam task " + std::to_string(task) + " lacks a piece");
+    record.triangles_in = left->triangle_count() + right->triangle_count();
+    SeamOptions seam_options;
+    seam_options.reduce = config_.reduce;
+    seam_options.reduce_options = reduce_options_;
+    seam_options.rings = config_.seam_rings;
+    Piece piece = seam(*left, *right,
+                       [this](GlobalId a, GlobalId b) { return decomposition_->domains_of_edge(a, b); },
+                       seam_options);
+    record.triangles_out = piece.triangle_count();
+    return piece;
+}
+
+TaskQueue::TaskQueue(const Job& job) {
+    const int count = job.task_count();
+    parent_.assign(static_cast<std::size_t>(count), -1);
+    children_done_.assign(static_cast<std::size_t>(count), 0);
+    for (int t = 0; t < count; ++t) {
+        const BisectionNode& n = job.node(t);
+        if (n.left >= 0) {
+            parent_[static_cast<std::size_t>(n.left)] = t;
+            parent_[static_cast<std::size_t>(n.right)] = t;
+        } else {
+            // Leaf task indices follow the depth-first order of the tree, as
+            // domain ids do: ordering leaves by task index orders them by domain.
+            ready_.insert({1, t});
+        }
+    }
+}
+
+int TaskQueue::pop() {
+    const int task = ready_.begin()->second;
+    ready_.erase(ready_.begin());
+    return task;
+}
+
+void TaskQueue::complete(int task) {
+    const int parent = parent_[static_cast<std::size_t>(task)];
+    if (parent < 0) {
+        done_root_ = true;
+        return;
+    }
+    if (++children_done_[static_cast<std::size_t>(parent)] == 2) ready_.insert({0, parent});
+}
+
+JobResult run_local(const Job& job, const Progress& progress) {
+    using clock = std::chrono::steady_clock;
+    const auto start = clock::now();
+    auto seconds = [&] { return std::chrono::duration<double>(clock::now() - start).count(); };
+    TaskQueue queue(job);
+    std::vector<std::optional<Piece>> pieces(static_cast<std::size_t>(job.task_count()));
+    JobResult result;
+    int done = 0;
+    while (!queue.finished()) {
+        const int task = queue.pop();
+        const BisectionNode& n = job.node(task);
+        TaskRecord record;
+        record.start = seconds();
+        const Piece* left = n.left >= 0 ? &*pieces[static_cast<std::size_t>(n.left)] : nullptr;
+        const Piece* right = n.right >= 0 ? &*pieces[static_cast<std::size_t>(n.right)] : nullptr;
+        try {
+            pieces[static_cast<std::size_t>(task)] = job.execute(task, left, right, record);
+        } catch (const Error& e) {
+            throw Error("task '" + job.describe(task) + "' failed: " + e.what());
+        } catch (const std::bad_alloc&) {
+            throw Error("task '" + job.describe(task) + "' failed: out of memory");
+        }
+        if (n.left >= 0) {
+            pieces[static_cast<std::size_t>(n.left)].reset();
+            pieces[static_cast<std::size_t>(n.right)].reset();
+        }
+        record.end = seconds();
+        result.tasks.push_back(record);
+        queue.complete(task);
+        if (progress) progress(++done, job.task_count(), seconds());
+    }
+    result.surface = std::move(*pieces[0]);
+    result.seconds = seconds();
+    return result;
+}
+
+bool launched_with_mpi() {
+#ifdef TETISO_HAVE_MPI
+    for (const char* variable : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", "MPI_LOCALNRANKS"})
+        if (std::getenv(variable)) return true;
+#endif
+    return false;
+}
+
+} // namespace tetiso

@@ -1,0 +1,300 @@
+// The MPI master/worker run (paper, section "Load balancing and job
+// scheduling"): rank 0 keeps the task queue and the finished pieces; a worker
+// says it is ready, receives a task with the pieces it needs, and returns the
+// piece it made, which also says it is ready again. Tasks go to whichever
+// worker asks first: load balances itself, the output does not depend on it.
+//
+// Failure: a worker whose task throws reports the message; rank 0 stops
+// handing out work, waits for the tasks in flight, tells every worker to stop
+// and raises the error — no rank is left blocked, so MPI_Finalize returns
+// everywhere and the launcher exits with a non-zero status.
+#include "tetiso/schedule.hpp"
+
+#ifdef TETISO_HAVE_MPI
+
+#include <mpi.h>
+
+#include <chrono>
+#include <cstring>
+#include <deque>
+#include <map>
+
+#include "tetiso/error.hpp"
+
+namespace tetiso {
+namespace {
+
+enum Tag : int { kReady = 1, kTask = 2, kResult = 3, kFailure = 4, kStop = 5 };
+
+// Flat byte buffers for messages: PODs and arrays, in order.
+class Packer {
+public:
+    template <class T>
+    void put(const T& value) {
+        append(&value, sizeof(T));
+    }
+    template <class T>
+    void put_array(const std::vector<T>& values) {
+        put<std::uint64_t>(values.size());
+        append(values.data(), values.size() * sizeof(T));
+    }
+    void put_piece(const Piece& piece) {
+        put_array(piece.x);
+        put_array(piece.y);
+        put_array(piece.z);
+        put_array(piece.key);
+        put_array(piece.flags);
+        put_array(piece.triangles);
+        put_array(piece.domains);
+    }
+    std::vector<std::byte> bytes;
+
+private:
+    void append(const void* data, std::size_t size) {
+        const std::size_t at = bytes.size();
+        bytes.resize(at + size);
+        if (size > 0) std::memcpy(bytes.data() + at, data, size);
+    }
+};
+
+class Unpacker {
+public:
+    explicit Unpacker(const std::vector<std::byte>& bytes) : bytes_(bytes) {}
+    template <class T>
+    T get() {
+        T value;
+        need(sizeof(T));
+        std::memcpy(&value, bytes_.data() + at_, sizeof(T));
+        at_ += sizeof(T);
+        return value;
+    }
+    template <class T>
+    std::vector<T> get_array() {
+        const auto n = get<std::uint64_t>();
+        need(n * sizeof(T));
+        std::vector<T> values(n);
+        std::memcpy(values.data(), bytes_.data() + at_, n * sizeof(T));
+        at_ += n * sizeof(T);
+        return values;
+    }
+    Piece get_piece() {
+        Piece piece;
+        piece.x = get_array<float>();
+        piece.y = get_array<float>();
+        piece.z = get_array<float>();
+        piece.key = get_array<EdgeKey>();
+        piece.flags = get_array<std::uint8_t>();
+        piece.triangles = get_array<std::int32_t>();
+        piece.domains = get_array<int>();
+        return piece;
+    }
+    std::string get_string() {
+        const auto chars = get_array<char>();
+        return std::string(chars.begin(), chars.end());
+    }
+
+private:
+    void need(std::size_t n) const {
+        if (at_ + n > bytes_.size()) throw Error("truncated message between MPI ranks");
+    }
+    const std::vector<std::byte>& bytes_;
+    std::size_t at_ = 0;
+};
+
+void send(const std::vector<std::byte>& bytes, int to, int tag) {
+    if (bytes.size() > static_cast<std::size_t>(INT32_MAX)) throw Error("message over 2 GiB between MPI ranks");
+    MPI_Send(bytes.data(), static_cast<int>(bytes.size()), MPI_BYTE, to, tag, MPI_COMM_WORLD);
+}
+
+// Receives the next message from `from` (or any rank), whatever its size.
+std::vector<std::byte> receive(int from, MPI_Status& status) {
+    MPI_Probe(from, MPI_ANY_TAG, MPI_COMM_WORLD, &status);
+    int size = 0;
+    MPI_Get_count(&status, MPI_BYTE, &size);
+    std::vector<std::byte> bytes(static_cast<std::size_t>(size));
+    MPI_Recv(bytes.data(), size, MPI_BYTE, status.MPI_SOURCE, status.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    return bytes;
+}
+
+void work(const Job& job) {
+    send({}, 0, kReady);
+    for (;;) {
+        MPI_Status status;
+        const std::vector<std::byte> message = receive(0, status);
+        if (status.MPI_TAG == kStop) {
+            Unpacker in(message);
+            if (in.get<std::int32_t>() != 0) throw JobStopped();
+            return;
+        }
+        Unpacker in(message);
+        const auto task = in.get<std::int32_t>();
+        const auto pieces = in.get<std::int32_t>();
+        std::optional<Piece> left, right;
+        if (pieces == 2) {
+            left = in.get_piece();
+            right = in.get_piece();
+        }
+        TaskRecord record;
+        Packer out;
+        const auto started = std::chrono::steady_clock::now();
+        try {
+            const Piece piece = job.execute(task, left ? &*left : nullptr, right ? &*right : nullptr, record);
+            left.reset();
+            right.reset();
+            out.put(task);
+            out.put(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+            out.put(record.triangles_in);
+            out.put(record.triangles_out);
+            out.put_piece(piece);
+            send(out.bytes, 0, kResult);
+        } catch (const std::exception& e) {
+            // Report, then wait to be told to stop: rank 0 decides the end.
+            Packer failure;
+            failure.put(task);
+            const std::string what = dynamic_cast<const std::bad_alloc*>(&e) ? "out of memory" : e.what();
+            failure.put_array(std::vector<char>(what.begin(), what.end()));
+            send(failure.bytes, 0, kFailure);
+        }
+    }
+}
+
+JobResult control(const Job& job, int ranks, const Progress& progress) {
+    using clock = std::chrono::steady_clock;
+    const auto start = clock::now();
+    auto seconds = [&] { return std::chrono::duration<double>(clock::now() - start).count(); };
+    TaskQueue queue(job);
+    std::vector<std::optional<Piece>> pieces(static_cast<std::size_t>(job.task_count()));
+    std::deque<int> idle;
+    std::map<int, int> running; // worker -> task
+    std::vector<bool> greeted(static_cast<std::size_t>(ranks), false);
+    JobResult result;
+    result.ranks = ranks;
+    std::string failure;
+    int done = 0;
+
+    auto dispatch = [&](int worker) {
+        const int task = queue.pop();
+        const BisectionNode& n = job.node(task);
+        Packer out;
+        out.put<std::int32_t>(task);
+        out.put<std::int32_t>(n.left >= 0 ? 2 : 0);
+        if (n.left >= 0) {
+            out.put_piece(*pieces[static_cast<std::size_t>(n.left)]);
+            out.put_piece(*pieces[static_cast<std::size_t>(n.right)]);
+            pieces[static_cast<std::size_t>(n.left)].reset();
+            pieces[static_cast<std::size_t>(n.right)].reset();
+        }
+        send(out.bytes, worker, kTask);
+        running[worker] = task;
+    };
+
+    while (!queue.finished() || !running.empty()) {
+        while (failure.empty() && !idle.empty() && queue.has_ready()) {
+            dispatch(idle.front());
+            idle.pop_front();
+        }
+        if (running.empty() && (!failure.empty() || queue.finished())) break;
+        MPI_Status status;
+        const std::vector<std::byte> message = receive(MPI_ANY_SOURCE, status);
+        const int worker = status.MPI_SOURCE;
+        greeted[static_cast<std::size_t>(worker)] = true;
+        if (status.MPI_TAG == kResult) {
+            Unpacker in(message);
+            TaskRecord record;
+            record.task = in.get<std::int32_t>();
+            const double duration = in.get<double>();
+            record.triangles_in = in.get<std::uint64_t>();
+            record.triangles_out = in.get<std::uint64_t>();
+            const BisectionNode& n = job.node(record.task);
+            record.kind = job.kind(record.task);
+            record.first_domain = n.first;
+            record.domain_count = n.count;
+            record.rank = worker;
+            record.end = seconds();
+            record.start = std::max(0.0, record.end - duration);
+            pieces[static_cast<std::size_t>(record.task)] = in.get_piece();
+            result.tasks.push_back(record);
+            running.erase(worker);
+            queue.complete(record.task);
+            if (progress) progress(++done, job.task_count(), seconds());
+        } else if (status.MPI_TAG == kFailure) {
+            Unpacker in(message);
+            const int task = in.get<std::int32_t>();
+            if (failure.empty())
+                failure = "task '" + job.describe(task) + "' failed on rank " + std::to_string(worker) + ": " +
+                          in.get_string();
+            running.erase(worker);
+        }
+        idle.push_back(worker);
+    }
+
+    // Every worker's first "ready" is received before it is told to stop, so
+    // no message is left unmatched at MPI_Finalize.
+    for (int worker = 1; worker < ranks; ++worker)
+        if (!greeted[static_cast<std::size_t>(worker)]) {
+            MPI_Status status;
+            receive(worker, status);
+        }
+    Packer stop;
+    stop.put<std::int32_t>(failure.empty() ? 0 : 1);
+    for (int worker = 1; worker < ranks; ++worker) send(stop.bytes, worker, kStop);
+    if (!failure.empty()) throw Error(failure);
+    result.surface = std::move(*pieces[0]);
+    result.seconds = seconds();
+    return result;
+}
+
+} // namespace
+
+MpiSession::MpiSession() {
+    if (!launched_with_mpi()) return;
+    int provided = 0;
+    // Tasks may use OpenMP threads, but only the main thread calls MPI.
+    MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided);
+    active_ = true;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+    MPI_Comm_size(MPI_COMM_WORLD, &size_);
+}
+
+MpiSession::~MpiSession() {
+    if (active_) MPI_Finalize();
+}
+
+bool MpiSession::broadcast(bool value) const {
+    if (!active_) return value;
+    int flag = value ? 1 : 0;
+    MPI_Bcast(&flag, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    return flag != 0;
+}
+
+std::optional<JobResult> run_mpi(const Job& job, const Progress& progress) {
+    int rank = 0, ranks = 1;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+    if (ranks == 1) {
+        JobResult result = run_local(job, progress);
+        return result;
+    }
+    if (rank != 0) {
+        work(job);
+        return std::nullopt;
+    }
+    return control(job, ranks, progress);
+}
+
+} // namespace tetiso
+
+#else
+
+#include "tetiso/error.hpp"
+
+namespace tetiso {
+std::optional<JobResult> run_mpi(const Job&, const Progress&) {
+    throw Error("this tetiso was built without MPI");
+}
+MpiSession::MpiSession() = default;
+MpiSession::~MpiSession() = default;
+bool MpiSession::broadcast(bool value) const { return value; }
+} // namespace tetiso
+
+#endif
