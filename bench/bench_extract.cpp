@@ -1,0 +1,173 @@
+// Extraction throughput: tetiso's marching tetrahedra against VTK's
+// vtkContour3DLinearGrid (merged points), in one process, on the same
+// tetrahedra and the same float field.
+//
+// The problem is the paper's: the N x N x N lattice as one domain (D = 1), the
+// "paper" field, level 0.5. For each N the cases are
+//   extract/tetiso/N:<N>/threads:1   tetiso, one thread
+//   extract/tetiso/N:<N>/threads:<T> tetiso, every hardware thread
+//   extract/vtk/N:<N>/threads:1      VTK, Sequential backend + SequentialProcessing
+//   extract/vtk/N:<N>/threads:<T>    VTK, its default backend (for context)
+// Only the extraction is timed: building the domain and converting it to a
+// vtkUnstructuredGrid happen once per N, outside the timed loops.
+//
+// Usage: bench_extract [--sizes=100,200] [Google Benchmark flags]
+// Without flags it runs 5 repetitions and reports their aggregates only; the
+// medians are what scripts/report_extract.py reads.
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tetiso/extract.hpp"
+#include "tetiso/field.hpp"
+#include "tetiso/lattice.hpp"
+#include "tetiso/mesh.hpp"
+
+// TETISO_HAVE_VTK comes with tetiso_reference, when it holds the VTK baseline.
+#ifdef TETISO_HAVE_VTK
+#include "tetiso/reference.hpp"
+#endif
+
+namespace {
+
+constexpr float kLevel = 0.5f;
+
+// One lattice problem at a time: the N=200 domain and its VTK copy take about
+// 3 GB together, so the previous N is dropped before the next is built.
+// Benchmarks are registered grouped by N, so each N is built once.
+struct Problem {
+    std::int64_t n = 0;
+    tetiso::Domain domain;
+#ifdef TETISO_HAVE_VTK
+    std::unique_ptr<tetiso::reference::VtkContour> vtk;
+#endif
+};
+
+Problem& problem(std::int64_t n) {
+    static Problem current;
+    if (current.n == n) return current;
+    current = Problem{};
+    const tetiso::Lattice lattice(n);
+    const tetiso::Decomposition decomposition(lattice, 1);
+    current.domain = decomposition.make_domain(0, *tetiso::make_field("paper"));
+#ifdef TETISO_HAVE_VTK
+    current.vtk = std::make_unique<tetiso::reference::VtkContour>(current.domain);
+#endif
+    current.n = n;
+    return current;
+}
+
+void set_size_counters(benchmark::State& state, const tetiso::Domain& domain, std::int64_t vertices,
+                       std::int64_t triangles) {
+    const auto tets = static_cast<double>(domain.tet_count());
+    state.counters["tets/s"] = benchmark::Counter(tets * static_cast<double>(state.iterations()),
+                                                  benchmark::Counter::kIsRate);
+    state.counters["tets"] = tets;
+    state.counters["nodes"] = static_cast<double>(domain.node_count());
+    state.counters["vertices"] = static_cast<double>(vertices);
+    state.counters["triangles"] = static_cast<double>(triangles);
+}
+
+void bench_tetiso(benchmark::State& state, std::int64_t n, int threads) {
+    const Problem& p = problem(n);
+    const tetiso::ExtractOptions options{threads};
+    std::int64_t vertices = 0, triangles = 0;
+    for (auto _ : state) {
+        // The piece is freed inside the loop, as VTK frees its previous output.
+        const tetiso::Piece piece = tetiso::extract(p.domain, kLevel, options);
+        vertices = static_cast<std::int64_t>(piece.vertex_count());
+        triangles = static_cast<std::int64_t>(piece.triangle_count());
+        benchmark::DoNotOptimize(piece.triangles.data());
+    }
+    set_size_counters(state, p.domain, vertices, triangles);
+}
+
+#ifdef TETISO_HAVE_VTK
+void bench_vtk(benchmark::State& state, std::int64_t n, int threads) {
+    Problem& p = problem(n);
+    const std::string backend = tetiso::reference::vtk_set_threads(threads);
+    state.SetLabel("backend:" + backend);
+    tetiso::reference::ContourCounts counts;
+    for (auto _ : state) {
+        counts = p.vtk->contour(kLevel, threads == 1);
+        benchmark::DoNotOptimize(counts);
+    }
+    set_size_counters(state, p.domain, counts.points, counts.triangles);
+}
+#endif
+
+std::vector<std::int64_t> parse_sizes(const char* text) {
+    std::vector<std::int64_t> sizes;
+    for (const char* p = text; *p != '\0';) {
+        char* end = nullptr;
+        const long long value = std::strtoll(p, &end, 10);
+        if (end == p || value < 2) {
+            std::fprintf(stderr, "bench_extract: bad --sizes list '%s'\n", text);
+            std::exit(2);
+        }
+        sizes.push_back(value);
+        p = *end == ',' ? end + 1 : end;
+    }
+    return sizes;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    // Defaults go first so that flags given on the command line override them.
+    std::vector<char*> args{argv[0]};
+    std::string repetitions = "--benchmark_repetitions=5";
+    std::string aggregates = "--benchmark_report_aggregates_only=true";
+    args.push_back(repetitions.data());
+    args.push_back(aggregates.data());
+    std::vector<std::int64_t> sizes{100, 200};
+    for (int i = 1; i < argc; ++i) {
+        if (std::strncmp(argv[i], "--sizes=", 8) == 0)
+            sizes = parse_sizes(argv[i] + 8);
+        else
+            args.push_back(argv[i]);
+    }
+    int count = static_cast<int>(args.size());
+    benchmark::Initialize(&count, args.data());
+    if (benchmark::ReportUnrecognizedArguments(count, args.data())) return 1;
+
+    const int all_threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+    std::vector<int> thread_counts{1};
+    if (all_threads > 1) thread_counts.push_back(all_threads);
+
+    benchmark::AddCustomContext("field", "paper");
+    benchmark::AddCustomContext("level", std::to_string(kLevel));
+    benchmark::AddCustomContext("domains", "1");
+#ifdef TETISO_HAVE_VTK
+    benchmark::AddCustomContext("vtk_version", tetiso::reference::vtk_version());
+    benchmark::AddCustomContext("vtk_default_backend", tetiso::reference::vtk_default_backend());
+#else
+    benchmark::AddCustomContext("vtk_default_backend", "none (built without VTK)");
+#endif
+
+    for (const std::int64_t n : sizes) {
+        const std::string size = "/N:" + std::to_string(n) + "/threads:";
+        for (const int threads : thread_counts)
+            benchmark::RegisterBenchmark(("extract/tetiso" + size + std::to_string(threads)).c_str(), bench_tetiso, n,
+                                         threads)
+                ->UseRealTime()
+                ->Unit(benchmark::kMillisecond);
+#ifdef TETISO_HAVE_VTK
+        for (const int threads : thread_counts)
+            benchmark::RegisterBenchmark(("extract/vtk" + size + std::to_string(threads)).c_str(), bench_vtk, n,
+                                         threads)
+                ->UseRealTime()
+                ->Unit(benchmark::kMillisecond);
+#endif
+    }
+    benchmark::RunSpecifiedBenchmarks();
+    benchmark::Shutdown();
+    return 0;
+}

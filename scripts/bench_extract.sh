@@ -1,0 +1,114 @@
+#!/usr/bin/env bash
+# Builds the extraction benchmarks (Release) and regenerates results/extract/:
+#   bench_extract.json  Google Benchmark output: tetiso (1 and all threads) and
+#                       VTK's vtkContour3DLinearGrid on the N=100 and N=200
+#                       lattices, aggregates of several repetitions
+#   memory.jsonl        peak resident memory, one fresh process per line
+#   meta.json           command, machine, commit
+#   README.md           the report, by scripts/report_extract.py
+#
+# Usage: scripts/bench_extract.sh [--commit REV] [-- bench_extract flags...]
+#   --commit REV  measure the committed tree REV (exported with git archive
+#                 into the build directory) instead of the working tree, so
+#                 that the report names exactly what was measured even while
+#                 others edit the checkout. Committed results use --commit HEAD.
+# Environment: BUILD_DIR (default build-bench), JOBS (default 2),
+#   REPETITIONS (default 7), SIZES (default 100,200), MEMORY_N (default 100).
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+cd "$root"
+
+commit_rev=""
+bench_flags=()
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --commit) commit_rev=$2; shift 2 ;;
+    --) shift; bench_flags=("$@"); break ;;
+    *) echo "bench_extract.sh: unknown argument $1" >&2; exit 2 ;;
+  esac
+done
+
+build=${BUILD_DIR:-$root/build-bench}
+jobs=${JOBS:-2}
+repetitions=${REPETITIONS:-7}
+sizes=${SIZES:-100,200}
+memory_n=${MEMORY_N:-100}
+out=$root/results/extract
+
+if [[ -n $commit_rev ]]; then
+  commit=$(git rev-parse --verify "$commit_rev^{commit}")
+  source_dir=$build/snapshot-${commit:0:12}
+  build_dir=$build/snapshot-${commit:0:12}-build
+  if [[ ! -d $source_dir ]]; then
+    mkdir -p "$source_dir.tmp"
+    git archive "$commit" | tar -x -C "$source_dir.tmp"
+    mv "$source_dir.tmp" "$source_dir"
+  fi
+  source_state="committed tree $commit (exported with git archive)"
+else
+  commit=$(git rev-parse HEAD)
+  source_dir=$root
+  build_dir=$build
+  # Only these paths go into the benchmark programs.
+  changed=$(git status --porcelain -- CMakeLists.txt core reference bench | awk '{print $2}' | paste -sd' ')
+  source_state="working tree on $commit${changed:+, with uncommitted changes in: $changed}"
+fi
+
+cmake -S "$source_dir" -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DTETISO_BENCH=ON -DTETISO_REFERENCE=ON -DTETISO_TESTS=OFF >/dev/null
+cmake --build "$build_dir" -j "$jobs" --target extract_benchmarks
+bin=$build_dir/bench
+if [[ ! -x $bin/bench_extract ]]; then
+  echo "bench_extract.sh: bench_extract was not built (is Google Benchmark installed?)" >&2
+  exit 1
+fi
+
+mkdir -p "$out"
+bench_cmd=("$bin/bench_extract" "--sizes=$sizes" "--benchmark_repetitions=$repetitions"
+  "--benchmark_report_aggregates_only=true" "--benchmark_out_format=json"
+  "--benchmark_out=$out/bench_extract.json" "${bench_flags[@]}")
+load_before=$(cut -d' ' -f1-3 /proc/loadavg)
+"${bench_cmd[@]}"
+load_after=$(cut -d' ' -f1-3 /proc/loadavg)
+
+# Peak memory: a fresh process per measurement, so nothing else is resident.
+memory_cmds=("$bin/bench_extract_memory --n=$memory_n --method=tetiso --threads=1"
+  "$bin/bench_extract_memory --n=$memory_n --method=tetiso --threads=$(nproc)")
+if [[ -x $bin/bench_extract_memory_vtk ]]; then
+  memory_cmds+=("$bin/bench_extract_memory_vtk --n=$memory_n --method=vtk --threads=1")
+fi
+: >"$out/memory.jsonl"
+for cmd in "${memory_cmds[@]}"; do
+  $cmd >>"$out/memory.jsonl"
+done
+
+# Paths in the report are relative to the repository, not this machine.
+relative() { local text=$*; echo "${text//$root\//}"; }
+BENCH_CMD=$(relative "${bench_cmd[*]}") \
+MEMORY_CMDS=$(relative "$(printf '%s\n' "${memory_cmds[@]}")") \
+SCRIPT_CMD="scripts/bench_extract.sh${commit_rev:+ --commit $commit_rev}${bench_flags[*]:+ -- ${bench_flags[*]}}" \
+SOURCE_STATE=$(relative "$source_state") \
+COMMIT=$commit \
+CPU_MODEL=$(lscpu | sed -n 's/^Model name:[[:space:]]*//p' | head -n1) \
+CPUS=$(nproc) \
+CORES_PER_SOCKET=$(lscpu | sed -n 's/^Core(s) per socket:[[:space:]]*//p' | head -n1) \
+THREADS_PER_CORE=$(lscpu | sed -n 's/^Thread(s) per core:[[:space:]]*//p' | head -n1) \
+MEMORY=$(free -g | awk '/^Mem:/ {print $2 " GiB"}') \
+KERNEL=$(uname -sr) \
+COMPILER=$(c++ --version | head -n1) \
+LOAD_BEFORE=$load_before LOAD_AFTER=$load_after \
+DATE=$(date -u +%Y-%m-%dT%H:%M:%SZ) \
+python3 - "$out/meta.json" <<'EOF'
+import json, os, sys
+keys = ["SCRIPT_CMD", "BENCH_CMD", "MEMORY_CMDS", "SOURCE_STATE", "COMMIT", "CPU_MODEL", "CPUS",
+        "CORES_PER_SOCKET", "THREADS_PER_CORE", "MEMORY", "KERNEL", "COMPILER", "LOAD_BEFORE",
+        "LOAD_AFTER", "DATE"]
+meta = {key.lower(): os.environ[key] for key in keys}
+meta["memory_cmds"] = meta["memory_cmds"].splitlines()
+with open(sys.argv[1], "w") as f:
+    json.dump(meta, f, indent=2)
+    f.write("\n")
+EOF
+
+python3 "$root/scripts/report_extract.py" "$out"
+echo "wrote $out/README.md"
