@@ -9,6 +9,8 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "tetiso/reduce.hpp"
+
 namespace tetiso::cli {
 
 using Command = std::function<void()>;
@@ -16,6 +18,16 @@ using Command = std::function<void()>;
 void add_extract_command(CLI::App& app, Command& run);
 void add_check_command(CLI::App& app, Command& run);
 void add_run_command(CLI::App& app, Command& run);
+void add_reduce_command(CLI::App& app, Command& run);
+
+// --phi, shared by every command that reduces.
+void add_phi_option(CLI::App& cmd, double& phi);
+
+// The default error bound of a reduction that knows no lattice spacing, as a
+// fraction of the input's mean edge length.
+inline constexpr double kAutoErrorPerEdgeLength = 0.4;
+double mean_edge_length(const Piece& piece);
+nlohmann::json reduce_json(const ReduceReport& report);
 
 // Fails early, before any work, if `path` cannot be created: its directory
 // must exist and be writable, and its extension known to `kind`.

@@ -10,6 +10,7 @@
 #include "tetiso/field.hpp"
 #include "tetiso/io.hpp"
 #include "tetiso/lattice.hpp"
+#include "tetiso/reduce.hpp"
 #include "tetiso/seam.hpp"
 
 namespace tetiso::cli {
@@ -21,6 +22,9 @@ struct ExtractArguments {
     std::string field = "paper";
     std::optional<double> level;
     int threads = 1;
+    bool reduce = false;
+    ReduceOptions reduce_options;
+    double max_error_spacings = 0.25;
     std::filesystem::path output;
     std::filesystem::path report;
 };
@@ -60,6 +64,13 @@ void run_extract(const ExtractArguments& args) {
         std::cerr << "tetiso: the surface is empty: level " << level
                   << (level < lowest || level > highest ? " is outside" : " is within")
                   << " the field's range [" << lowest << ", " << highest << "]\n";
+    ReduceReport reduce_report;
+    if (args.reduce) {
+        ReduceOptions options = args.reduce_options;
+        options.threads = args.threads;
+        options.max_error = args.max_error_spacings * lattice.spacing();
+        surface = tetiso::reduce(surface, options, &reduce_report);
+    }
     const double t_write = now_seconds();
     write_piece(surface, args.output);
     const double write_seconds = now_seconds() - t_write;
@@ -82,9 +93,15 @@ void run_extract(const ExtractArguments& args) {
              {{"generate", generate_seconds},
               {"extract", extract_seconds},
               {"combine", combine_seconds},
+              {"reduce", reduce_report.seconds},
               {"write", write_seconds},
               {"total", now_seconds() - start}}},
         };
+        if (args.reduce) {
+            report["reduction"] = reduce_json(reduce_report);
+            report["phi"] = args.reduce_options.phi;
+            report["max_error"] = args.max_error_spacings * lattice.spacing();
+        }
         write_report(report, args.report);
     }
 }
@@ -106,6 +123,12 @@ void add_extract_command(CLI::App& app, Command& run) {
         "--level", [args](double level) { args->level = level; },
         "Isosurface level (default: the field's own, 0.5 for paper)");
     cmd->add_option("--threads", args->threads, "Threads inside a domain (0 = all cores); output does not depend on it")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    cmd->add_flag("--reduce", args->reduce, "Reduce the combined surface (parallel edge collapse and flip)");
+    add_phi_option(*cmd, args->reduce_options.phi);
+    cmd->add_option("--max-error", args->max_error_spacings,
+                    "With --reduce: bound on the distance to the raw surface, in lattice spacings (0: none)")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     cmd->add_option("-o,--output", args->output, "Output surface, .ply or .vtp")->required();

@@ -117,9 +117,7 @@ void add_run_command(CLI::App& app, Command& run) {
     cmd->add_option_function<double>(
         "--level", [args](double level) { args->job.level = level; },
         "Isosurface level (default: the field's own, 0.5 for paper)");
-    cmd->add_option("--phi", job.reduce_options.phi, "Reduction threshold PHI* in (0, 1]: higher keeps more")
-        ->check(CLI::Range(1e-9, 1.0))
-        ->capture_default_str();
+    add_phi_option(*cmd, job.reduce_options.phi);
     cmd->add_option("--max-error", job.max_error_spacings,
                     "Bound on the distance to the raw surface, in lattice spacings (0: none)")
         ->check(CLI::NonNegativeNumber)

@@ -1,0 +1,91 @@
+// `tetiso reduce`: reduce a surface file with the paper's Φ criterion, keeping
+// its topology and its locked vertices.
+#include <cmath>
+
+#include "commands.hpp"
+#include "tetiso/error.hpp"
+#include "tetiso/io.hpp"
+#include "tetiso/reduce.hpp"
+
+namespace tetiso::cli {
+
+double mean_edge_length(const Piece& piece) {
+    double sum = 0;
+    for (std::size_t t = 0; t < piece.triangle_count(); ++t)
+        for (int k = 0; k < 3; ++k) {
+            const auto a = static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>(k)]);
+            const auto b = static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>((k + 1) % 3)]);
+            sum += std::hypot(piece.x[a] - piece.x[b], piece.y[a] - piece.y[b], piece.z[a] - piece.z[b]);
+        }
+    return piece.triangle_count() ? sum / static_cast<double>(3 * piece.triangle_count()) : 0.0;
+}
+
+void add_phi_option(CLI::App& cmd, double& phi) {
+    cmd.add_option("--phi", phi, "Reduction threshold PHI* in (0, 1]: an edge collapses when its PHI exceeds it")
+        ->check(CLI::Range(0.0, 1.0).description("in (0, 1]"))
+        ->capture_default_str();
+}
+
+nlohmann::json reduce_json(const ReduceReport& report) {
+    nlohmann::json rounds = nlohmann::json::array();
+    for (const ReduceRound& r : report.rounds)
+        rounds.push_back({{"round", r.round}, {"candidates", r.candidates}, {"collapses", r.collapses}, {"flips", r.flips}});
+    return {{"triangles_in", report.triangles_in},   {"triangles_out", report.triangles_out},
+            {"vertices_in", report.vertices_in},     {"vertices_out", report.vertices_out},
+            {"rounds", rounds},                      {"seconds", report.seconds}};
+}
+
+namespace {
+
+struct ReduceArguments {
+    std::filesystem::path input, output, report;
+    ReduceOptions options;
+    std::optional<double> max_error;
+};
+
+void run_reduce(const ReduceArguments& args) {
+    const double start = now_seconds();
+    surface_format(args.output);
+    require_writable(args.output);
+    if (!args.report.empty()) require_writable(args.report);
+    const Piece input = read_piece(args.input);
+    ReduceOptions options = args.options;
+    // Without a lattice spacing to relate to, bound the error by a fraction
+    // of the input's own edge length (marching-tets edges are about 0.6 h).
+    options.max_error = args.max_error.value_or(kAutoErrorPerEdgeLength * mean_edge_length(input));
+    ReduceReport report;
+    const Piece output = reduce(input, options, &report);
+    write_piece(output, args.output);
+    if (!args.report.empty()) {
+        nlohmann::json json = reduce_json(report);
+        json["command"] = "reduce";
+        json["input"] = args.input.string();
+        json["output"] = args.output.string();
+        json["phi"] = options.phi;
+        json["max_error"] = options.max_error;
+        json["threads"] = options.threads;
+        json["total_seconds"] = now_seconds() - start;
+        write_report(json, args.report);
+    }
+}
+
+} // namespace
+
+void add_reduce_command(CLI::App& app, Command& run) {
+    auto args = std::make_shared<ReduceArguments>();
+    CLI::App* cmd = app.add_subcommand("reduce", "Reduce a surface: parallel edge collapse and flip, topology kept");
+    cmd->add_option("input", args->input, "Surface to reduce, .ply or .vtp (an oriented manifold)")->required();
+    cmd->add_option("-o,--output", args->output, "Reduced surface, .ply or .vtp")->required();
+    add_phi_option(*cmd, args->options.phi);
+    cmd->add_option_function<double>(
+           "--max-error", [args](double e) { args->max_error = e; },
+           "Bound on the distance to the input surface, absolute (0: none; default: 0.4 x mean edge length)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--threads", args->options.threads, "Threads (0 = all cores); output does not depend on it")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    cmd->add_option("--report", args->report, "Write a JSON report here");
+    cmd->callback([&run, args] { run = [args] { run_reduce(*args); }; });
+}
+
+} // namespace tetiso::cli
