@@ -36,8 +36,10 @@
 namespace tetiso {
 
 // Throws tetiso::Error naming `what` (e.g. "mesh a") if x, y, z differ in
-// length, the triangle array is not a multiple of 3, or an index is out of
-// range. Both check_topology and hausdorff call it first.
+// length, a coordinate is NaN or infinite, the triangle array is not a
+// multiple of 3, an index is out of range, or the mesh is too large for
+// 32-bit half-edge ids. check_topology, hausdorff and
+// count_self_intersections call it first.
 void validate_indexed_mesh(const Piece& mesh, std::string_view what = "mesh");
 
 // What makes two components the same surface up to homeomorphism.
@@ -180,8 +182,9 @@ struct HausdorffReport {
 HausdorffReport hausdorff(const Piece& a, const Piece& b, const HausdorffOptions& options = {});
 
 // The JSON that `tetiso check` prints: snake_case keys as named above, the
-// components under "per_component" and the signatures as
-// {"genus", "boundary_loops", "orientable"} objects.
+// angle statistics under "min_angle_deg" (min, p01 and mean null when no
+// triangle was measured), the components under "per_component" and the
+// signatures as {"genus", "boundary_loops", "orientable"} objects.
 nlohmann::json to_json(const TopologyReport& report);
 nlohmann::json to_json(const HausdorffReport& report);
 
