@@ -42,6 +42,8 @@ def load_cases(path):
                 repetitions=int(row["repetitions"]),
                 label=row.get("label", ""),
             )
+        elif aggregate == "min":
+            case["min_ms"] = to_ms(row["real_time"], row["time_unit"])
         elif aggregate == "cv":
             case["cv"] = row["real_time"]  # a fraction for the cv aggregate
     return data.get("context", {}), cases
@@ -94,6 +96,15 @@ def throughput_section(cases):
         detail = ", ".join(f"{ratio:.2f}× at N={n}" for n, ratio in verdicts)
         lines.append(f"**Target** tetiso single-thread ≥ {TARGET_RATIO:g}× VTK sequential (merged points): "
                      f"**{'met' if met else 'missed'}** ({detail}).")
+        best = []
+        for n, _ in verdicts:
+            t1, v1 = cases[("tetiso", n, 1)], cases[("vtk", n, 1)]
+            if "min_ms" in t1 and "min_ms" in v1:
+                best.append(f"{v1['min_ms'] / t1['min_ms']:.2f}× at N={n}")
+        if best:
+            lines.append("")
+            lines.append("Ratio of the fastest repetitions (least disturbed by other load), single thread: "
+                         + ", ".join(best) + ".")
     else:
         lines.append("**Target** not assessed: this build has no VTK baseline.")
     lines.append("")
@@ -105,12 +116,14 @@ def details_section(cases):
     mismatches = []
     for (impl, n, threads), case in sorted(cases.items(), key=lambda item: (item[0][1], item[0][0], item[0][2])):
         rows.append([f"extract/{impl}/N:{n}/threads:{threads}", case.get("label", "") or "",
-                     f"{case['time_ms']:.1f}", f"{100 * case.get('cv', 0.0):.1f} %", mega(case["rate"]),
+                     f"{case['time_ms']:.1f}", f"{case['min_ms']:.1f}" if "min_ms" in case else "—",
+                     f"{100 * case.get('cv', 0.0):.1f} %", mega(case["rate"]),
                      f"{case['vertices']:,}", f"{case['triangles']:,}", case["repetitions"]])
         reference = cases.get(("tetiso", n, 1))
         if reference and (case["vertices"], case["triangles"]) != (reference["vertices"], reference["triangles"]):
             mismatches.append(f"extract/{impl}/N:{n}/threads:{threads}")
-    lines = [table(["case", "label", "median time (ms)", "cv", "Mtets/s", "vertices", "triangles", "repetitions"],
+    lines = [table(["case", "label", "median time (ms)", "min time (ms)", "cv", "Mtets/s (median)", "vertices",
+                    "triangles", "repetitions"],
                    rows), ""]
     if mismatches:
         lines.append("**Sanity check failed:** vertex or triangle counts differ from tetiso single-thread in "
@@ -210,14 +223,16 @@ def main():
                 f"({meta['cores_per_socket']} cores per socket, {meta['threads_per_core']} thread(s) per core), "
                 f"{meta['memory']}, {meta['kernel']}",
                 f"- Compiler: {meta['compiler']}, Release (-O3), `-ffp-contract=off`",
+                f"- Environment: `{meta.get('environment', '')}`",
                 f"- Date: {meta['date']}; load average (1, 5, 15 min) before the run {meta['load_before']}, "
                 f"after {meta['load_after']}"]
     if context:
         out += [f"- Google Benchmark: {context.get('num_cpus', '?')} CPUs at {context.get('mhz_per_cpu', '?')} MHz, "
                 f"library built as {context.get('library_build_type', '?')} (the harness only; it adds "
                 "nothing measurable to millisecond-long iterations)"]
-    out += ["", "The machine is shared with other work, so single runs vary; the medians of the "
-            "repetitions and their coefficient of variation (cv) are reported. Regenerate with the "
+    out += ["", "The machine is shared with other work, so single runs vary: repetitions of all cases "
+            "are interleaved in random order, and the medians, fastest repetitions and coefficients of "
+            "variation (cv) are reported. Regenerate with the "
             "command above; `scripts/report_extract.py results/extract` rewrites this file from the "
             "JSON alone.", ""]
     (directory / "README.md").write_text("\n".join(out))
