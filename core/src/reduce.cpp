@@ -61,10 +61,14 @@ int resolve_threads(int threads) {
     return threads < 1 ? 1 : threads;
 }
 
+// Below this many elements a loop runs on the calling thread: a fork and join
+// costs more than the work, and far more on an oversubscribed machine.
+constexpr i64 kParallelMin = 16384;
+
 template <class Function>
 void parallel_for(int threads, i64 n, const Function& function) {
 #ifdef _OPENMP
-    if (threads > 1 && n > 2048) {
+    if (threads > 1 && n > kParallelMin) {
 #pragma omp parallel for num_threads(threads) schedule(static)
         for (i64 i = 0; i < n; ++i) function(i);
         return;
@@ -182,7 +186,9 @@ struct Fans {
 
 enum FanProblem : u8 { kFanOk = 0, kEdgeCount, kEdgeDirection, kVertexFans };
 
-void build_fans(const Surface& s, int threads, Fans& fans, std::vector<i32>& scratch_count,
+// validate: check every edge and vertex (the input); later rounds only
+// order (the operations keep the surface manifold).
+void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::vector<i32>& scratch_count,
                 std::vector<i32>& scratch_corner) {
     const i32 nv = s.vertices(), nt = s.triangles();
     auto& count = scratch_count;
@@ -207,8 +213,8 @@ void build_fans(const Surface& s, int threads, Fans& fans, std::vector<i32>& scr
 
     // Order each fan; record the first problem per vertex.
     std::vector<u8> problem(static_cast<std::size_t>(nv), kFanOk);
-    std::vector<i32> problem_other(static_cast<std::size_t>(nv), -1);
-    std::vector<i32> problem_count(static_cast<std::size_t>(nv), 0);
+    std::vector<i32> problem_other(validate ? static_cast<std::size_t>(nv) : 0, -1);
+    std::vector<i32> problem_count(validate ? static_cast<std::size_t>(nv) : 0, 0);
     parallel_for(threads, nv, [&](i64 vi) {
         const i32 v = static_cast<i32>(vi);
         const i32 o = fans.off[static_cast<std::size_t>(v)];
@@ -234,11 +240,12 @@ void build_fans(const Surface& s, int threads, Fans& fans, std::vector<i32>& scr
         }
         auto fail = [&](FanProblem what, i32 other, i32 n) {
             problem[static_cast<std::size_t>(v)] = what;
+            if (!validate) return;
             problem_other[static_cast<std::size_t>(v)] = other;
             problem_count[static_cast<std::size_t>(v)] = n;
         };
         // Each neighbour u: edge (v,u) in at most 2 triangles, once each way.
-        for (i32 i = 0; i < k; ++i) {
+        for (i32 i = 0; i < k && validate; ++i) {
             for (const i32 u : {a[i], b[i]}) {
                 i32 ca = 0, cb = 0;
                 for (i32 j = 0; j < k; ++j) {
@@ -284,6 +291,8 @@ void build_fans(const Surface& s, int threads, Fans& fans, std::vector<i32>& scr
     for (i32 v = 0; v < nv; ++v) {
         const u8 what = problem[static_cast<std::size_t>(v)];
         if (what == kFanOk) continue;
+        if (!validate)
+            throw Error("tetiso::reduce: internal error: vertex (key " + key_text(s, v) + ") became non-manifold");
         const i32 u = problem_other[static_cast<std::size_t>(v)];
         std::ostringstream m;
         m << "tetiso::reduce: the input is not an oriented 2-manifold: ";
@@ -302,13 +311,13 @@ void build_fans(const Surface& s, int threads, Fans& fans, std::vector<i32>& scr
 // ---------------------------------------------------------------------------
 // Step 2: edges. Edge e joins v0[e] < v1[e]; f1[e] is the triangle that runs
 // v0 → v1, f2[e] the one that runs v1 → v0 (-1 on the border, at most one of
-// them). slot[off[v] + v + j] is the edge to neighbour j of v;
-// tedge[3t + r] is the edge from corner r to corner r+1 of triangle t.
+// them); v1 is neighbour s0[e] of v0 and v0 is neighbour s1[e] of v1.
+// slot[off[v] + v + j] is the edge to neighbour j of v; tedge[3t + r] is the
+// edge from corner r to corner r + 1 of triangle t.
 
 struct Edges {
-    std::vector<i32> v0, v1, f1, f2;
-    std::vector<i32> slot;
-    std::vector<i32> tedge;
+    std::vector<i32> v0, v1, f1, f2, s0, s1;
+    std::vector<i32> slot, tedge;
     i32 count() const { return static_cast<i32>(v0.size()); }
 };
 
@@ -316,7 +325,7 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
                  std::vector<i32>& scratch_offset) {
     const i32 nv = s.vertices();
     auto& count = scratch_count;
-    count.assign(static_cast<std::size_t>(nv), 0);
+    count.resize(static_cast<std::size_t>(nv));
     parallel_for(threads, nv, [&](i64 vi) {
         const i32 v = static_cast<i32>(vi);
         i32 c = 0;
@@ -325,28 +334,25 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
     });
     auto& eoff = scratch_offset;
     exclusive_scan(count, eoff);
-    const i32 ne = eoff[static_cast<std::size_t>(nv)];
-    edges.v0.resize(static_cast<std::size_t>(ne));
-    edges.v1.resize(static_cast<std::size_t>(ne));
-    edges.f1.resize(static_cast<std::size_t>(ne));
-    edges.f2.resize(static_cast<std::size_t>(ne));
-    edges.slot.assign(fans.face.size() + static_cast<std::size_t>(nv), -1);
-    edges.tedge.assign(s.tri.size(), -1);
+    const auto ne = static_cast<std::size_t>(eoff[static_cast<std::size_t>(nv)]);
+    for (auto* a : {&edges.v0, &edges.v1, &edges.f1, &edges.f2, &edges.s0, &edges.s1}) a->resize(ne);
+    edges.slot.resize(fans.face.size() + static_cast<std::size_t>(nv));
+    edges.tedge.resize(s.tri.size());
     parallel_for(threads, nv, [&](i64 vi) {
         const i32 v = static_cast<i32>(vi);
         const i32 o = fans.off[static_cast<std::size_t>(v)], k = fans.k(v), n = fans.nn(v);
         const bool border = fans.border[static_cast<std::size_t>(v)];
-        i32 e = eoff[static_cast<std::size_t>(v)];
+        auto e = static_cast<std::size_t>(eoff[static_cast<std::size_t>(v)]);
         for (i32 j = 0; j < n; ++j) {
             const i32 u = fans.nbr(v, j);
             if (u < v) continue;
-            edges.v0[static_cast<std::size_t>(e)] = v;
-            edges.v1[static_cast<std::size_t>(e)] = u;
-            edges.f1[static_cast<std::size_t>(e)] = j < k ? fans.face[static_cast<std::size_t>(o + j)] : -1;
-            edges.f2[static_cast<std::size_t>(e)] =
-                j > 0 ? fans.face[static_cast<std::size_t>(o + j - 1)]
-                      : (border ? -1 : fans.face[static_cast<std::size_t>(o + k - 1)]);
-            edges.slot[static_cast<std::size_t>(o + v + j)] = e;
+            edges.v0[e] = v;
+            edges.v1[e] = u;
+            edges.f1[e] = j < k ? fans.face[static_cast<std::size_t>(o + j)] : -1;
+            edges.f2[e] = j > 0 ? fans.face[static_cast<std::size_t>(o + j - 1)]
+                                : (border ? -1 : fans.face[static_cast<std::size_t>(o + k - 1)]);
+            edges.s0[e] = j;
+            edges.slot[static_cast<std::size_t>(o + v + j)] = static_cast<i32>(e);
             ++e;
         }
     });
@@ -359,7 +365,9 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
             const i32 ou = fans.off[static_cast<std::size_t>(u)];
             for (i32 i = 0, m = fans.nn(u); i < m; ++i)
                 if (fans.nbr(u, i) == v) {
-                    edges.slot[static_cast<std::size_t>(o + v + j)] = edges.slot[static_cast<std::size_t>(ou + u + i)];
+                    const i32 e = edges.slot[static_cast<std::size_t>(ou + u + i)];
+                    edges.slot[static_cast<std::size_t>(o + v + j)] = e;
+                    edges.s1[static_cast<std::size_t>(e)] = j;
                     break;
                 }
         }
@@ -375,38 +383,54 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
 
 // ---------------------------------------------------------------------------
 // Step 3: per-triangle unit normal (zero when the triangle is degenerate) and
-// quality (sine of its smallest angle).
+// quality (sine of its smallest angle), packed so one load brings both.
 
-struct Normals {
-    std::vector<float> nx, ny, nz, q;
-    Vec n(i32 t) const {
-        const auto i = static_cast<std::size_t>(t);
-        return {nx[i], ny[i], nz[i]};
-    }
-    bool valid(i32 t) const { return q[static_cast<std::size_t>(t)] > kNormalQuality; }
+struct FaceGeometry {
+    float nx, ny, nz, q;
+    Vec n() const { return {nx, ny, nz}; }
     // Below this quality a float normal is dominated by rounding.
-    static constexpr float kNormalQuality = 1e-5f;
+    bool valid() const { return q > 1e-5f; }
 };
 
-void build_normals(const Surface& s, int threads, Normals& normals) {
+void build_geometry(const Surface& s, int threads, std::vector<FaceGeometry>& geometry) {
     const i32 nt = s.triangles();
-    normals.nx.resize(static_cast<std::size_t>(nt));
-    normals.ny.resize(static_cast<std::size_t>(nt));
-    normals.nz.resize(static_cast<std::size_t>(nt));
-    normals.q.resize(static_cast<std::size_t>(nt));
+    geometry.resize(static_cast<std::size_t>(nt));
     parallel_for(threads, nt, [&](i64 ti) {
         const auto t = static_cast<std::size_t>(ti);
         Vec n;
         const double q = quality(s.pos(s.tri[3 * t]), s.pos(s.tri[3 * t + 1]), s.pos(s.tri[3 * t + 2]), &n);
-        normals.nx[t] = static_cast<float>(n.x);
-        normals.ny[t] = static_cast<float>(n.y);
-        normals.nz[t] = static_cast<float>(n.z);
-        normals.q[t] = static_cast<float>(q);
+        geometry[t] = {static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z), static_cast<float>(q)};
     });
 }
 
+// Distance from p to triangle (a, b, c) (Ericson, Real-Time Collision
+// Detection, 5.1.5).
+double point_triangle_distance(Vec p, Vec a, Vec b, Vec c) {
+    const Vec ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0) return norm(ap);
+    const Vec bp = p - b;
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) return norm(bp);
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return norm(p - (a + (d1 / (d1 - d3)) * ab));
+    const Vec cp = p - c;
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) return norm(cp);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return norm(p - (a + (d2 / (d2 - d6)) * ac));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+        return norm(p - (b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b)));
+    const double denom = va + vb + vc;
+    if (!(denom > 0)) return std::min(norm(ap), std::min(norm(bp), norm(cp)));
+    const double v = vb / denom, w = vc / denom;
+    return norm(p - (a + v * ab + w * ac));
+}
+
 // ---------------------------------------------------------------------------
-// Step 4: evaluate every edge.
+// Step 4: propose an operation for every edge (cheap: Φ, position, priority);
+// the legality tests run later, only for the operations the selection picks.
 //
 // Φ (paper): for an interior edge (u, w) with faces f1 (running u → w) and f2
 // and unit normals n1, n2, the leaf of each end is traversed from f1 away from
@@ -418,7 +442,7 @@ void build_normals(const Surface& s, int threads, Normals& normals) {
 // Φ = Φ_u t + Φ_w (1 - t), and the collapsed vertex is placed at
 // t u + (1 - t) w: when w's leaf is the flatter one, t > 1/2 and the vertex
 // stays near u — the less flat end (a corner, a crease) is preserved, and Φ,
-// which leans to the less flat end's value as well, stays a smooth minimum.
+// which leans to the less flat end's value as well, is a smooth minimum.
 // Degenerate faces have no normal and are skipped.
 //
 // Branches:
@@ -433,14 +457,15 @@ void build_normals(const Surface& s, int threads, Normals& normals) {
 //    vertices never collapses (it would pinch the surface).
 //  - very short edges (shorter than short_edge_ratio times the mean of the
 //    other edges of the two faces, or of length 0, as marching tetrahedra
-//    produce where the surface passes through a mesh node): collapsed
-//    whatever Φ is, with first priority.
+//    produce where the surface passes through a mesh node), and the two
+//    shorter edges of a degenerate face (a cap): collapsed whatever Φ is,
+//    with first priority.
 //  - valence-3 vertices: an interior free vertex with three neighbours is
 //    removed (collapsed into its neighbour of smallest key; the three faces
-//    become one), whatever Φ is; the error bound still applies.
+//    become one), whatever Φ is; the legality and error tests still apply.
 //  - flips: an interior edge that is not collapsed is flipped when its faces
 //    are nearly coplanar and the flip raises their smaller minimum angle by
-//    20 % — the long edge between two narrow triangles.
+//    20 % — the long edge between two narrow triangles. Lowest priority.
 //
 // Legality (all must hold, else the operation is dropped):
 //  - link condition: the common neighbours of u and w are exactly the
@@ -448,16 +473,18 @@ void build_normals(const Surface& s, int threads, Normals& normals) {
 //  - every vertex keeps at least 3 neighbours (2 on the border), so no
 //    component drops below a tetrahedron; a border loop keeps 3 edges;
 //  - every surviving face of the two leaves keeps its orientation (normal
-//    turns by at most max_normal_turn) and gets no smaller minimum angle than
-//    min(min_angle, its own before), and no face of non-zero area becomes
-//    degenerate;
-//  - error: new bound = max bound of the faces involved + the largest of the
-//    distances of p to the planes of the old faces, of u and w to the planes
-//    of the new faces, and (on the border) of u and w to the new border
-//    polyline; it must stay <= max_error. Because each triangle carries the
-//    bound of the input region it replaced, the bounds add along the history
-//    of a region: a one-sided guard, cheap and local (after Ronfard and
-//    Rossignac's plane-distance error).
+//    turns by at most max_normal_turn, or stays on the side of the leaf's
+//    mean normal where it had none) and keeps a non-zero area; the smallest
+//    angle over the new faces is at least min(min_angle, the smallest angle
+//    over the old faces), so collapses that remove a degenerate face stay
+//    possible but none makes the worst angle of its region worse;
+//  - error: each triangle carries a bound on its distance to the input
+//    surface. p lies on the old surface (on edge (u, w)), so the new fan
+//    departs from the old one most at the old vertices u and w: the increment
+//    is their exact distance to the new fan (and, on the border, to the new
+//    border polyline). The new faces get max(bound of the old faces of both
+//    leaves) + increment, which must stay <= max_error. Bounds add along the
+//    history of a region: a one-sided, cheap, local guard.
 
 enum OpKind : u8 { kNone = 0, kCollapse = 1, kFlip = 2 };
 
@@ -466,14 +493,23 @@ struct Ops {
     std::vector<u64> priority;
     std::vector<float> px, py, pz, err;
     std::vector<i32> survivor;
+    void resize(std::size_t n) {
+        kind.resize(n);
+        priority.resize(n);
+        px.resize(n);
+        py.resize(n);
+        pz.resize(n);
+        err.resize(n);
+        survivor.resize(n);
+    }
 };
 
 struct Params {
     double phi;
-    double q_min;        // sin(min_angle)
-    double cos_turn;     // cos(max_normal_turn)
-    double cos_flip;     // cos(flip_max_dihedral)
-    double max_error;    // <= 0: none
+    double q_min;     // sin(min_angle)
+    double cos_turn;  // cos(max_normal_turn)
+    double cos_flip;  // cos(flip_max_dihedral)
+    double max_error; // <= 0: none
     double short_ratio;
     bool flips;
 };
@@ -490,149 +526,177 @@ u64 make_priority(u64 cls, double score, u64 hash) {
            (hash & ((u64{1} << kPriorityHashBits) - 1));
 }
 
+// The slots, in the fans of both ends, of the faces of an edge.
+struct EdgeSlots {
+    i32 u, w, f1, f2;
+    i32 ou, ku, uf1, uf2; // u's fan offset, size, slot of f1 / f2 (-1: none)
+    i32 ow, kw, wf1, wf2;
+    i32 c, d;             // opposite vertices (-1: none)
+};
+
 class Evaluator {
 public:
-    Evaluator(const Surface& s, const Fans& fans, const Edges& edges, const Normals& normals, const Params& params,
-              int round)
-        : s_(s), fans_(fans), edges_(edges), normals_(normals), p_(params), round_(round) {}
+    Evaluator(const Surface& s, const Fans& fans, const Edges& edges, const std::vector<FaceGeometry>& geometry,
+              const Params& params, int round)
+        : s_(s), fans_(fans), edges_(edges), geo_(geometry), p_(params), round_(round) {}
 
-    void operator()(i32 e, Ops& ops) const {
-        ops.kind[static_cast<std::size_t>(e)] = kNone;
-        const i32 u = edges_.v0[static_cast<std::size_t>(e)], w = edges_.v1[static_cast<std::size_t>(e)];
-        const i32 f1 = edges_.f1[static_cast<std::size_t>(e)], f2 = edges_.f2[static_cast<std::size_t>(e)];
-        const u64 hash = mix64(s_.key[static_cast<std::size_t>(u)] * 0x9e3779b97f4a7c15ULL ^
-                               mix64(s_.key[static_cast<std::size_t>(w)] + static_cast<u64>(round_)));
-        if (try_collapse(e, u, w, f1, f2, hash, ops)) return;
-        if (p_.flips && f1 >= 0 && f2 >= 0) try_flip(e, u, w, f1, f2, hash, ops);
+    EdgeSlots slots(i32 e) const {
+        const auto i = static_cast<std::size_t>(e);
+        EdgeSlots r;
+        r.u = edges_.v0[i];
+        r.w = edges_.v1[i];
+        r.f1 = edges_.f1[i];
+        r.f2 = edges_.f2[i];
+        r.ou = fans_.off[static_cast<std::size_t>(r.u)];
+        r.ku = fans_.k(r.u);
+        r.ow = fans_.off[static_cast<std::size_t>(r.w)];
+        r.kw = fans_.k(r.w);
+        const i32 j = edges_.s0[i], m = edges_.s1[i];
+        r.uf1 = j < r.ku ? j : -1;
+        r.uf2 = j > 0 ? j - 1 : (border(r.u) ? -1 : r.ku - 1);
+        r.wf2 = m < r.kw ? m : -1;
+        r.wf1 = m > 0 ? m - 1 : (border(r.w) ? -1 : r.kw - 1);
+        // f1 = (u, w, c): in u's slot the corner before u is c; f2 = (w, u, d).
+        r.c = r.uf1 >= 0 ? fans_.prev[static_cast<std::size_t>(r.ou + r.uf1)] : -1;
+        r.d = r.uf2 >= 0 ? fans_.next[static_cast<std::size_t>(r.ou + r.uf2)] : -1;
+        return r;
+    }
+
+    void propose(i32 e, Ops& ops) const {
+        const auto i = static_cast<std::size_t>(e);
+        ops.kind[i] = kNone;
+        const EdgeSlots r = slots(e);
+        const u64 hash = mix64(s_.key[static_cast<std::size_t>(r.u)] * 0x9e3779b97f4a7c15ULL ^
+                               mix64(s_.key[static_cast<std::size_t>(r.w)] + static_cast<u64>(round_)));
+        if (propose_collapse(r, hash, ops, i)) return;
+        if (p_.flips && r.f1 >= 0 && r.f2 >= 0) propose_flip(r, hash, ops, i);
+    }
+
+    bool legal(i32 e, Ops& ops) const {
+        const auto i = static_cast<std::size_t>(e);
+        if (ops.kind[i] == kFlip) return true; // fully tested in propose_flip
+        return legal_collapse(slots(e), ops, i);
     }
 
 private:
-    i32 third(i32 t, i32 a, i32 b) const {
-        for (int r = 0; r < 3; ++r) {
-            const i32 v = s_.tri[static_cast<std::size_t>(3 * t + r)];
-            if (v != a && v != b) return v;
-        }
-        return -1;
-    }
-    i32 slot_of(i32 v, i32 t) const {
-        const i32 o = fans_.off[static_cast<std::size_t>(v)], k = fans_.k(v);
-        for (i32 j = 0; j < k; ++j)
-            if (fans_.face[static_cast<std::size_t>(o + j)] == t) return o + j;
-        return -1;
-    }
     bool border(i32 v) const { return fans_.border[static_cast<std::size_t>(v)] != 0; }
+    const FaceGeometry& geo(i32 t) const { return geo_[static_cast<std::size_t>(t)]; }
+    i32 face(i32 slot) const { return fans_.face[static_cast<std::size_t>(slot)]; }
 
-    // Φ_j of the leaf of v for edge faces f1, f2 (f2 < 0: border edge, one
-    // part against n1). dir: +1 when f2 precedes f1 in v's fan, -1 otherwise.
-    double leaf_phi(i32 v, i32 f1, i32 f2, Vec n1, Vec n2, int dir) const {
-        const i32 o = fans_.off[static_cast<std::size_t>(v)], k = fans_.k(v);
-        const i32 s1 = slot_of(v, f1) - o;
+    // Φ_j of the leaf of a vertex (fan offset o, size k) for an interior edge
+    // whose faces sit in slots s1 and s2: traversal from s1 in direction dir
+    // (away from s2); on a border vertex the faces beyond s2 join part 2.
+    double leaf_phi(i32 o, i32 k, bool path, i32 s1, i32 s2, int dir, Vec n1, Vec n2) const {
         double phi = 1.0;
-        if (f2 < 0) {
-            for (i32 j = 0; j < k; ++j) {
-                const i32 t = fans_.face[static_cast<std::size_t>(o + j)];
-                if (t == f1 || !normals_.valid(t)) continue;
-                phi = std::min(phi, dot(n1, normals_.n(t)));
-            }
-            return phi;
-        }
-        const bool cycle = !border(v);
         bool part1 = true;
         i32 j = s1;
         for (i32 step = 0; step < k; ++step) {
-            const i32 t = fans_.face[static_cast<std::size_t>(o + j)];
-            if (t == f2) break;
-            if (normals_.valid(t)) {
-                const Vec n = normals_.n(t);
+            if (j == s2) break;
+            const FaceGeometry& g = geo(face(o + j));
+            if (g.valid()) {
+                const Vec n = g.n();
                 const double d1 = dot(n, n1), d2 = dot(n, n2);
                 if (part1 && d1 < d2) part1 = false;
                 phi = std::min(phi, part1 ? d1 : d2);
             }
             j += dir;
-            if (cycle) j = (j + k) % k;
+            if (!path) j = j < 0 ? j + k : (j >= k ? j - k : j);
             else if (j < 0 || j >= k) break;
         }
-        if (!cycle) {
-            // The faces beyond f2 (a path does not wrap around): part 2.
-            for (j = slot_of(v, f2) - o - dir; j >= 0 && j < k; j -= dir) {
-                const i32 t = fans_.face[static_cast<std::size_t>(o + j)];
-                if (normals_.valid(t)) phi = std::min(phi, dot(normals_.n(t), n2));
+        if (path)
+            for (j = s2 - dir; j >= 0 && j < k; j -= dir) {
+                const FaceGeometry& g = geo(face(o + j));
+                if (g.valid()) phi = std::min(phi, dot(g.n(), n2));
             }
+        return phi;
+    }
+
+    // Φ_j of a border edge's end: its leaf against the edge's one face.
+    double leaf_phi_border(i32 o, i32 k, Vec n) const {
+        double phi = 1.0;
+        for (i32 j = 0; j < k; ++j) {
+            const FaceGeometry& g = geo(face(o + j));
+            if (g.valid()) phi = std::min(phi, dot(n, g.n()));
         }
         return phi;
     }
 
-    // The other border neighbour of border vertex v on border edge (v, u).
-    i32 border_other(i32 v, i32 u) const {
+    // The other border neighbour of border vertex v on border edge (v, x).
+    i32 border_other(i32 v, i32 x) const {
         const i32 first = fans_.nbr(v, 0), last = fans_.nbr(v, fans_.k(v));
-        return first == u ? last : first;
+        return first == x ? last : first;
     }
 
-    bool try_collapse(i32 e, i32 u, i32 w, i32 f1, i32 f2, u64 hash, Ops& ops) const {
-        const bool border_edge = f1 < 0 || f2 < 0;
+    bool propose_collapse(const EdgeSlots& r, u64 hash, Ops& ops, std::size_t i) const {
+        const i32 u = r.u, w = r.w;
+        const bool border_edge = r.f1 < 0 || r.f2 < 0;
         const bool bu = border(u), bw = border(w);
         if (!border_edge && bu && bw) return false;
         const bool pin_u = s_.locked(u) || (!border_edge && bu);
         const bool pin_w = s_.locked(w) || (!border_edge && bw);
         if (pin_u && pin_w) return false;
-        const Vec pu = s_.pos(u), pw = s_.pos(w);
-        const i32 c = f1 >= 0 ? third(f1, u, w) : -1;
-        const i32 d = f2 >= 0 ? third(f2, u, w) : -1;
+        auto offer = [&](Vec p, i32 keep, u64 cls, double score) {
+            ops.kind[i] = kCollapse;
+            ops.priority[i] = make_priority(cls, score, hash);
+            ops.px[i] = static_cast<float>(p.x);
+            ops.py[i] = static_cast<float>(p.y);
+            ops.pz[i] = static_cast<float>(p.z);
+            ops.survivor[i] = keep;
+            return true;
+        };
 
-        // Valence-3 branch: an interior free vertex with three neighbours,
-        // removed through the edge to its neighbour of smallest index (= key).
+        // Valence-3 branch.
         for (const i32 mover : {w, u}) {
             const i32 keep = mover == w ? u : w;
             if (border(mover) || s_.locked(mover) || fans_.k(mover) != 3) continue;
             i32 smallest = fans_.nbr(mover, 0);
             for (i32 j = 1; j < 3; ++j) smallest = std::min(smallest, fans_.nbr(mover, j));
-            if (smallest != keep) continue;
-            return finish_collapse(e, u, w, f1, f2, c, d, s_.pos(keep), keep, kClassValence3, 1.0, hash, ops);
+            if (smallest == keep) return offer(s_.pos(keep), keep, kClassValence3, 1.0);
         }
 
-        // Very short edges.
+        const Vec pu = s_.pos(u), pw = s_.pos(w);
         const double len = norm(pw - pu);
-        double other_sum = 0.0;
-        int other_n = 0;
-        if (c >= 0) {
-            const Vec pc = s_.pos(c);
-            other_sum += norm(pc - pu) + norm(pc - pw);
-            other_n += 2;
-        }
-        if (d >= 0) {
-            const Vec pd = s_.pos(d);
-            other_sum += norm(pd - pu) + norm(pd - pw);
-            other_n += 2;
-        }
-        const double local = other_n ? other_sum / other_n : 0.0;
-        const bool short_edge = len == 0.0 || len <= p_.short_ratio * local;
+        double local = 0.0;
+        int local_n = 0;
+        for (const i32 o : {r.c, r.d})
+            if (o >= 0) {
+                const Vec po = s_.pos(o);
+                local += norm(po - pu) + norm(po - pw);
+                local_n += 2;
+            }
+        local = local_n ? local / local_n : 0.0;
+        bool short_edge = len == 0.0 || len <= p_.short_ratio * local;
+        // A degenerate face (a cap: one corner on the opposite side) goes by
+        // collapsing one of its two shorter edges.
+        for (const auto& [f, o] : {std::pair{r.f1, r.c}, std::pair{r.f2, r.d}})
+            if (!short_edge && f >= 0 && !geo(f).valid()) {
+                const Vec po = s_.pos(o);
+                short_edge = len < std::max(norm(po - pu), norm(po - pw));
+            }
 
-        // Φ of both leaves.
         double phi_u = -1.0, phi_w = -1.0;
         if (border_edge) {
-            const i32 f = f1 >= 0 ? f1 : f2;
-            if (normals_.valid(f)) {
-                const Vec n = normals_.n(f);
-                phi_u = leaf_phi(u, f, -1, n, n, 1);
-                phi_w = leaf_phi(w, f, -1, n, n, 1);
+            const i32 f = r.f1 >= 0 ? r.f1 : r.f2;
+            if (geo(f).valid()) {
+                phi_u = leaf_phi_border(r.ou, r.ku, geo(f).n());
+                phi_w = leaf_phi_border(r.ow, r.kw, geo(f).n());
             }
             // 1D criterion along the border polyline.
-            const i32 up = border_other(u, w), wn = border_other(w, u);
-            const Vec dir = pw - pu;
-            const Vec du = pu - s_.pos(up), dw = s_.pos(wn) - pw;
-            const double lu = norm(du), lw = norm(dw);
             if (len > 0) {
-                phi_u = std::min(phi_u, lu > 0 ? dot(du, dir) / (lu * len) : 1.0);
-                phi_w = std::min(phi_w, lw > 0 ? dot(dw, dir) / (lw * len) : 1.0);
+                const Vec dir = (1.0 / len) * (pw - pu);
+                const Vec du = pu - s_.pos(border_other(u, w)), dw = s_.pos(border_other(w, u)) - pw;
+                const double lu = norm(du), lw = norm(dw);
+                if (lu > 0) phi_u = std::min(phi_u, dot(du, dir) / lu);
+                if (lw > 0) phi_w = std::min(phi_w, dot(dw, dir) / lw);
             }
         } else {
-            const bool v1 = normals_.valid(f1), v2 = normals_.valid(f2);
+            const bool v1 = geo(r.f1).valid(), v2 = geo(r.f2).valid();
             if (v1 || v2) {
-                const Vec n1 = v1 ? normals_.n(f1) : normals_.n(f2);
-                const Vec n2 = v2 ? normals_.n(f2) : n1;
+                const Vec n1 = v1 ? geo(r.f1).n() : geo(r.f2).n();
+                const Vec n2 = v2 ? geo(r.f2).n() : n1;
                 // In u's fan f2 precedes f1: traverse forward; in w's, backward.
-                phi_u = leaf_phi(u, f1, f2, n1, n2, +1);
-                phi_w = leaf_phi(w, f1, f2, n1, n2, -1);
+                if (!pin_u) phi_u = leaf_phi(r.ou, r.ku, bu, r.uf1, r.uf2, +1, n1, n2);
+                if (!pin_w) phi_w = leaf_phi(r.ow, r.kw, bw, r.wf1, r.wf2, -1, n1, n2);
             }
         }
 
@@ -646,145 +710,132 @@ private:
         } else if (phi_u > 0 && phi_w > 0) {
             const double t = (2.0 / kPi) * std::atan(phi_w / phi_u);
             phi = phi_u * t + phi_w * (1.0 - t);
-            if (len == 0.0) {
-                p = pu;
-                keep = u;
-            } else {
-                p = t * pu + (1.0 - t) * pw;
-                keep = t >= 0.5 ? u : w;
-            }
+            keep = t >= 0.5 ? u : w;
+            p = len == 0.0 ? pu : t * pu + (1.0 - t) * pw;
         } else {
-            // A leaf folds back: Φ gives no position; a short edge still
-            // collapses, to its midpoint (it moves by a tiny amount).
+            // A leaf folds back (a corner, a spike): Φ gives no position. A
+            // short edge still collapses, into the folded end so the corner
+            // stays, or to its midpoint when both ends fold (a tiny move).
             phi = std::min(phi_u, phi_w);
-            p = len == 0.0 ? pu : 0.5 * (pu + pw);
-            keep = u;
+            keep = phi_u <= 0 || phi_w > 0 ? u : w;
+            p = phi_u <= 0 && phi_w <= 0 ? (len == 0.0 ? pu : 0.5 * (pu + pw)) : s_.pos(keep);
         }
-        if (short_edge) {
-            const double score = local > 0 ? 1.0 - len / local : 1.0;
-            return finish_collapse(e, u, w, f1, f2, c, d, p, keep, kClassShort, score, hash, ops);
-        }
-        if (!(phi > p_.phi)) return false;
-        return finish_collapse(e, u, w, f1, f2, c, d, p, keep, kClassCollapse, phi, hash, ops);
+        if (short_edge) return offer(p, keep, kClassShort, local > 0 ? 1.0 - len / local : 1.0);
+        if (phi > p_.phi) return offer(p, keep, kClassCollapse, phi);
+        return false;
     }
 
-    // Legality and error of collapsing (u, w) to p, keeping vertex `keep`.
-    bool finish_collapse(i32 e, i32 u, i32 w, i32 f1, i32 f2, i32 c, i32 d, Vec p, i32 keep, u64 cls,
-                         double score, u64 hash, Ops& ops) const {
-        const bool border_edge = f1 < 0 || f2 < 0;
+    bool legal_collapse(const EdgeSlots& r, Ops& ops, std::size_t i) const {
+        const i32 u = r.u, w = r.w, c = r.c, d = r.d;
+        const bool border_edge = r.f1 < 0 || r.f2 < 0;
         // Link condition.
         const i32 nu = fans_.nn(u), nw = fans_.nn(w);
         i32 common = 0;
-        for (i32 i = 0; i < nu; ++i) {
-            const i32 x = fans_.nbr(u, i);
+        for (i32 a = 0; a < nu; ++a) {
+            const i32 x = fans_.nbr(u, a);
             if (x == w) continue;
-            for (i32 j = 0; j < nw; ++j)
-                if (fans_.nbr(w, j) == x) {
+            for (i32 b = 0; b < nw; ++b)
+                if (fans_.nbr(w, b) == x) {
                     if (x != c && x != d) return false;
                     ++common;
                 }
         }
         if (common != (border_edge ? 1 : 2)) return false;
-        // Valences.
-        const bool p_border = border(u) || border(w);
-        if (nu + nw - 2 - common < (p_border ? 2 : 3)) return false;
+        // Valences, border loops.
+        if (nu + nw - 2 - common < ((border(u) || border(w)) ? 2 : 3)) return false;
         for (const i32 o : {c, d})
             if (o >= 0 && fans_.nn(o) - 1 < (border(o) ? 2 : 3)) return false;
-        double border_error = 0.0;
+        const Vec p{ops.px[i], ops.py[i], ops.pz[i]};
+        const Vec pu = s_.pos(u), pw = s_.pos(w);
+        double increment = 0.0;
         if (border_edge) {
             const i32 up = border_other(u, w), wn = border_other(w, u);
             if (up == wn) return false; // a border loop of 3 edges
             const Vec a = s_.pos(up), b = s_.pos(wn);
-            for (const Vec q : {s_.pos(u), s_.pos(w)})
-                border_error =
-                    std::max(border_error, std::min(point_segment_distance(q, a, p), point_segment_distance(q, p, b)));
+            for (const Vec q : {pu, pw})
+                increment = std::max(increment,
+                                     std::min(point_segment_distance(q, a, p), point_segment_distance(q, p, b)));
         }
 
-        // Geometry of the faces of both leaves.
-        double err_old = 0.0, plane = 0.0;
+        // Old faces of both leaves: error bound, worst quality, mean normal.
+        double err_old = 0.0, q_worst = 1.0;
         Vec nsum{0, 0, 0};
-        for (const i32 v : {u, w}) {
-            const Vec pv = s_.pos(v);
-            const i32 o = fans_.off[static_cast<std::size_t>(v)], k = fans_.k(v);
-            for (i32 j = o; j < o + k; ++j) {
-                const i32 t = fans_.face[static_cast<std::size_t>(j)];
-                if (v == w && (t == f1 || t == f2)) continue; // seen from u
-                err_old = std::max(err_old, static_cast<double>(s_.err[static_cast<std::size_t>(t)]));
-                if (normals_.valid(t)) {
-                    const Vec n = normals_.n(t);
-                    plane = std::max(plane, std::abs(dot(n, p - pv)));
-                    nsum = nsum + n;
-                }
-            }
+        for (i32 j = 0; j < r.ku + r.kw; ++j) {
+            if (j >= r.ku && (j - r.ku == r.wf1 || j - r.ku == r.wf2)) continue; // seen from u
+            const i32 t = j < r.ku ? face(r.ou + j) : face(r.ow + j - r.ku);
+            const FaceGeometry& g = geo(t);
+            err_old = std::max(err_old, static_cast<double>(s_.err[static_cast<std::size_t>(t)]));
+            q_worst = std::min(q_worst, static_cast<double>(g.q));
+            if (g.valid()) nsum = nsum + g.n();
         }
-        double back = 0.0;
-        for (const i32 v : {u, w}) {
-            const Vec pv = s_.pos(v);
-            const i32 o = fans_.off[static_cast<std::size_t>(v)], k = fans_.k(v);
-            for (i32 j = o; j < o + k; ++j) {
-                const i32 t = fans_.face[static_cast<std::size_t>(j)];
-                if (t == f1 || t == f2) continue;
-                const Vec a = s_.pos(fans_.next[static_cast<std::size_t>(j)]);
-                const Vec b = s_.pos(fans_.prev[static_cast<std::size_t>(j)]);
-                Vec n;
-                const double q_new = quality(p, a, b, &n);
-                const double q_old = normals_.q[static_cast<std::size_t>(t)];
-                if (q_new < std::min(p_.q_min, q_old)) return false;
-                if (q_old > 0 && !(q_new > 0)) return false;
-                if (q_new > 0) {
-                    if (normals_.valid(t)) {
-                        if (dot(n, normals_.n(t)) < p_.cos_turn) return false;
-                    } else if (dot(n, nsum) < 0) {
-                        return false;
-                    }
-                    back = std::max(back, std::abs(dot(n, pv - p)));
-                }
+        const double q_floor = std::min(p_.q_min, q_worst);
+        // New faces: (p, next, prev) for every other face of both leaves.
+        constexpr int kMaxFaces = 64;
+        Vec fa[kMaxFaces], fb[kMaxFaces];
+        int faces = 0;
+        for (i32 j = 0; j < r.ku + r.kw; ++j) {
+            const bool at_u = j < r.ku;
+            const i32 js = at_u ? j : j - r.ku;
+            if (at_u ? (js == r.uf1 || js == r.uf2) : (js == r.wf1 || js == r.wf2)) continue;
+            const i32 slot = (at_u ? r.ou : r.ow) + js;
+            const Vec a = s_.pos(fans_.next[static_cast<std::size_t>(slot)]);
+            const Vec b = s_.pos(fans_.prev[static_cast<std::size_t>(slot)]);
+            Vec n;
+            const double q_new = quality(p, a, b, &n);
+            const FaceGeometry& g = geo(face(slot));
+            // No face of non-zero area becomes degenerate (one that already
+            // is may stay so: its own short edge will remove it).
+            if (q_new < q_floor || (!(q_new > 0) && g.q > 0)) return false;
+            if (q_new > 0 && (g.valid() ? dot(n, g.n()) < p_.cos_turn : dot(n, nsum) < 0)) return false;
+            if (faces < kMaxFaces) {
+                fa[faces] = a;
+                fb[faces] = b;
             }
+            ++faces;
         }
-        const double err_new = err_old + std::max(std::max(plane, back), border_error);
-        if (p_.max_error > 0 && err_new > p_.max_error) return false;
-
-        const auto i = static_cast<std::size_t>(e);
-        ops.kind[i] = kCollapse;
-        ops.priority[i] = make_priority(cls, score, hash);
-        ops.px[i] = static_cast<float>(p.x);
-        ops.py[i] = static_cast<float>(p.y);
-        ops.pz[i] = static_cast<float>(p.z);
-        ops.err[i] = static_cast<float>(err_new);
-        ops.survivor[i] = keep;
+        if (p_.max_error > 0) {
+            if (faces > kMaxFaces) return false;
+            for (const Vec q : {pu, pw}) {
+                double best = norm(q - p);
+                for (int f = 0; f < faces && best > increment; ++f)
+                    best = std::min(best, point_triangle_distance(q, p, fa[f], fb[f]));
+                increment = std::max(increment, best);
+            }
+            if (err_old + increment > p_.max_error) return false;
+        }
+        ops.err[i] = static_cast<float>(err_old + increment);
         return true;
     }
 
-    bool try_flip(i32 e, i32 u, i32 w, i32 f1, i32 f2, u64 hash, Ops& ops) const {
-        const i32 c = third(f1, u, w), d = third(f2, u, w);
-        if (c == d) return false;
-        if (fans_.nn(u) - 1 < (border(u) ? 2 : 3) || fans_.nn(w) - 1 < (border(w) ? 2 : 3)) return false;
-        for (i32 j = 0, n = fans_.nn(c); j < n; ++j)
-            if (fans_.nbr(c, j) == d) return false;
-        const double q_old = std::min(normals_.q[static_cast<std::size_t>(f1)], normals_.q[static_cast<std::size_t>(f2)]);
+    bool propose_flip(const EdgeSlots& r, u64 hash, Ops& ops, std::size_t i) const {
+        const i32 u = r.u, w = r.w, c = r.c, d = r.d;
+        const FaceGeometry &g1 = geo(r.f1), &g2 = geo(r.f2);
+        const double q_old = std::min(g1.q, g2.q);
+        if (q_old >= 0.5 || c == d) return false; // no triangle with an angle below 30°: nothing to gain
+        if (!g1.valid() && !g2.valid()) return false;
         const Vec pu = s_.pos(u), pw = s_.pos(w), pc = s_.pos(c), pd = s_.pos(d);
         // f1 = (u, w, c), f2 = (w, u, d) → g1 = (c, u, d), g2 = (d, w, c).
         Vec n1, n2;
         const double q1 = quality(pc, pu, pd, &n1), q2 = quality(pd, pw, pc, &n2);
         const double q_new = std::min(q1, q2);
-        if (!(q_new > 1.2 * q_old) || q_new < std::min(p_.q_min, q_old) || !(q_new > 0)) return false;
-        if (dot(n1, n2) < p_.cos_flip) return false;
-        const bool v1 = normals_.valid(f1), v2 = normals_.valid(f2);
-        if (!v1 && !v2) return false;
-        const Vec m1 = v1 ? normals_.n(f1) : normals_.n(f2);
-        const Vec m2 = v2 ? normals_.n(f2) : m1;
-        if (dot(m1, m2) < p_.cos_flip) return false;
+        if (!(q_new > 1.2 * q_old) || q_new < std::min(p_.q_min, q_old)) return false;
+        const Vec m1 = g1.valid() ? g1.n() : g2.n();
+        const Vec m2 = g2.valid() ? g2.n() : m1;
+        if (dot(m1, m2) < p_.cos_flip || dot(n1, n2) < p_.cos_flip) return false;
         for (const Vec m : {m1, m2})
             for (const Vec n : {n1, n2})
                 if (dot(m, n) < p_.cos_flip) return false;
+        if (fans_.nn(u) - 1 < (border(u) ? 2 : 3) || fans_.nn(w) - 1 < (border(w) ? 2 : 3)) return false;
+        for (i32 j = 0, n = fans_.nn(c); j < n; ++j)
+            if (fans_.nbr(c, j) == d) return false;
         // Error: the gap between the two diagonals.
         const Vec axis = cross(pw - pu, pd - pc);
         const double axis_len = norm(axis);
         if (!(axis_len > 0)) return false;
         const double gap = std::abs(dot(pc - pu, axis)) / axis_len;
-        const double err_new = std::max(s_.err[static_cast<std::size_t>(f1)], s_.err[static_cast<std::size_t>(f2)]) + gap;
+        const double err_new =
+            std::max(s_.err[static_cast<std::size_t>(r.f1)], s_.err[static_cast<std::size_t>(r.f2)]) + gap;
         if (p_.max_error > 0 && err_new > p_.max_error) return false;
-        const auto i = static_cast<std::size_t>(e);
         ops.kind[i] = kFlip;
         ops.priority[i] = make_priority(kClassFlip, q_new - q_old, hash);
         ops.err[i] = static_cast<float>(err_new);
@@ -794,20 +845,27 @@ private:
     const Surface& s_;
     const Fans& fans_;
     const Edges& edges_;
-    const Normals& normals_;
+    const std::vector<FaceGeometry>& geo_;
     const Params& p_;
     int round_;
 };
 
 // ---------------------------------------------------------------------------
 // Step 5: independent set. Operation o touches the vertex set S(o) (the two
-// ends of a collapse; the ends and both opposite vertices of a flip). o is
-// chosen when it beats every active operation o' whose S(o') lies within
-// path length 1 of S(o): best[v] is the best operation touching v, ring[v]
-// the best over v's closed 1-ring, and o wins when ring[v] == o for all v in
-// S(o). Two winners are then at path length >= 2, so their leaves share no
-// face and the tests each passed stay valid. Ties in priority fall to the
-// vertex keys. Later passes add operations that stay clear of all winners.
+// ends of a collapse; the ends and both opposite vertices of a flip). In each
+// pass, o is picked when it beats every active operation o' whose S(o') lies
+// within path length 1 of S(o): best[v] is the best active operation touching
+// v, ring[v] the best over v's closed 1-ring, and o is picked when
+// ring[v] == o for all v in S(o) — the parallel form of the paper's
+// sequential choice, a scatter-max over vertices and then over their rings
+// (written as gathers, so no atomics). Two picked operations are at path
+// length >= 2, so their leaves share no face and the tests of each stay valid
+// whatever the others do. A picked operation then runs its legality tests; if
+// it fails it is dropped and claims nothing. Operations within path length 1
+// of a chosen one leave the active set, and passes repeat over the shrinking
+// active set until it is empty: the result is a maximal independent set of
+// legal operations, and an illegal operation never blocks its neighbours.
+// Ties in priority fall to the vertex keys, never to thread or order.
 
 class Selector {
 public:
@@ -826,87 +884,119 @@ public:
                s_.key[static_cast<std::size_t>(edges_.v1[static_cast<std::size_t>(b)])];
     }
 
-    // The vertices an operation touches (2 or 4).
     int touched(i32 e, i32 out[4]) const {
-        out[0] = edges_.v0[static_cast<std::size_t>(e)];
-        out[1] = edges_.v1[static_cast<std::size_t>(e)];
-        if (ops_.kind[static_cast<std::size_t>(e)] != kFlip) return 2;
-        out[2] = third(edges_.f1[static_cast<std::size_t>(e)], out[0], out[1]);
-        out[3] = third(edges_.f2[static_cast<std::size_t>(e)], out[0], out[1]);
+        const auto i = static_cast<std::size_t>(e);
+        out[0] = edges_.v0[i];
+        out[1] = edges_.v1[i];
+        if (ops_.kind[i] != kFlip) return 2;
+        out[2] = third(edges_.f1[i], out[0], out[1]);
+        out[3] = third(edges_.f2[i], out[0], out[1]);
         return 4;
     }
 
-    void select(int threads, int passes, std::vector<u8>& active, std::vector<u8>& chosen) const {
+    // candidates: the edges with an operation, ascending. Sets chosen[e].
+    template <class Legal>
+    void select(int threads, int max_passes, bool any_flip, std::vector<i32> candidates, std::vector<u8>& chosen,
+                const Legal& legal) const {
         const i32 nv = s_.vertices(), ne = edges_.count();
-        std::vector<i32> best(static_cast<std::size_t>(nv)), ring(static_cast<std::size_t>(nv));
-        std::vector<u8> end(static_cast<std::size_t>(nv)), claimed(static_cast<std::size_t>(nv));
-        for (int pass = 0; pass < passes; ++pass) {
-            // best[v]: over edges at v and flips of the edges opposite v.
-            parallel_for(threads, nv, [&](i64 vi) {
-                const i32 v = static_cast<i32>(vi);
+        best_.assign(static_cast<std::size_t>(nv), -1);
+        ring_.resize(static_cast<std::size_t>(nv));
+        end_.assign(static_cast<std::size_t>(nv), 0);
+        mark_.assign(static_cast<std::size_t>(nv), 0);
+        active_.assign(static_cast<std::size_t>(ne), 0);
+        for (const i32 e : candidates) active_[static_cast<std::size_t>(e)] = 1;
+        std::vector<i32>& A = candidates;
+        std::vector<i32> T, next;
+        std::vector<u8> picked(A.size());
+        for (int pass = 0; pass < max_passes && !A.empty(); ++pass) {
+            // T: the vertices touched by active operations (best[] is -1
+            // everywhere else).
+            for (const i32 v : T) best_[static_cast<std::size_t>(v)] = -1;
+            T.clear();
+            for (const i32 e : A) {
+                i32 vs[4];
+                const int n = touched(e, vs);
+                for (int i = 0; i < n; ++i)
+                    if (!mark_[static_cast<std::size_t>(vs[i])]) {
+                        mark_[static_cast<std::size_t>(vs[i])] = 1;
+                        T.push_back(vs[i]);
+                    }
+            }
+            for (const i32 v : T) mark_[static_cast<std::size_t>(v)] = 0;
+            const i64 nt = static_cast<i64>(T.size());
+            parallel_for(threads, nt, [&](i64 ti) {
+                const i32 v = T[static_cast<std::size_t>(ti)];
                 const i32 o = fans_.off[static_cast<std::size_t>(v)], k = fans_.k(v), n = fans_.nn(v);
                 i32 b = -1;
                 for (i32 j = 0; j < n; ++j) {
                     const i32 e = edges_.slot[static_cast<std::size_t>(o + v + j)];
-                    if (active[static_cast<std::size_t>(e)] && beats(e, b)) b = e;
+                    if (active_[static_cast<std::size_t>(e)] && beats(e, b)) b = e;
                 }
-                for (i32 j = 0; j < k; ++j) {
+                // Flips of the edges opposite v touch v too.
+                for (i32 j = 0; j < k && any_flip; ++j) {
                     const i32 t = fans_.face[static_cast<std::size_t>(o + j)];
                     i32 r = 0;
                     while (s_.tri[static_cast<std::size_t>(3 * t + r)] != v) ++r;
                     const i32 e = edges_.tedge[static_cast<std::size_t>(3 * t + (r + 1) % 3)];
-                    if (active[static_cast<std::size_t>(e)] && ops_.kind[static_cast<std::size_t>(e)] == kFlip &&
+                    if (active_[static_cast<std::size_t>(e)] && ops_.kind[static_cast<std::size_t>(e)] == kFlip &&
                         beats(e, b))
                         b = e;
                 }
-                best[static_cast<std::size_t>(v)] = b;
+                best_[static_cast<std::size_t>(v)] = b;
             });
-            parallel_for(threads, nv, [&](i64 vi) {
-                const i32 v = static_cast<i32>(vi);
-                i32 b = best[static_cast<std::size_t>(v)];
+            parallel_for(threads, nt, [&](i64 ti) {
+                const i32 v = T[static_cast<std::size_t>(ti)];
+                i32 b = best_[static_cast<std::size_t>(v)];
                 for (i32 j = 0, n = fans_.nn(v); j < n; ++j) {
-                    const i32 x = best[static_cast<std::size_t>(fans_.nbr(v, j))];
+                    const i32 x = best_[static_cast<std::size_t>(fans_.nbr(v, j))];
                     if (x >= 0 && beats(x, b)) b = x;
                 }
-                ring[static_cast<std::size_t>(v)] = b;
-                end[static_cast<std::size_t>(v)] = 0;
+                ring_[static_cast<std::size_t>(v)] = b;
             });
-            i64 winners = 0;
+            // Picked operations run their legality tests.
+            picked.assign(A.size(), 0);
+            const i64 na = static_cast<i64>(A.size());
 #ifdef _OPENMP
-#pragma omp parallel for num_threads(threads) schedule(static) reduction(+ : winners) if (threads > 1 && ne > 2048)
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 512) if (threads > 1 && na > kParallelMin)
 #endif
-            for (i32 e = 0; e < ne; ++e) {
-                if (!active[static_cast<std::size_t>(e)]) continue;
+            for (i64 ai = 0; ai < na; ++ai) {
+                const i32 e = A[static_cast<std::size_t>(ai)];
                 i32 vs[4];
                 const int n = touched(e, vs);
                 bool win = true;
-                for (int i = 0; i < n && win; ++i) win = ring[static_cast<std::size_t>(vs[i])] == e;
+                for (int i = 0; i < n && win; ++i) win = ring_[static_cast<std::size_t>(vs[i])] == e;
                 if (!win) continue;
+                picked[static_cast<std::size_t>(ai)] = 1;
+                if (!legal(e)) continue;
                 chosen[static_cast<std::size_t>(e)] = 1;
-                for (int i = 0; i < n; ++i) end[static_cast<std::size_t>(vs[i])] = 1;
-                ++winners;
+                for (int i = 0; i < n; ++i) end_[static_cast<std::size_t>(vs[i])] = 1;
             }
-            if (winners == 0 || pass + 1 == passes) break;
-            parallel_for(threads, nv, [&](i64 vi) {
-                const i32 v = static_cast<i32>(vi);
-                u8 c = end[static_cast<std::size_t>(v)];
-                for (i32 j = 0, n = fans_.nn(v); j < n && !c; ++j) c = end[static_cast<std::size_t>(fans_.nbr(v, j))];
-                claimed[static_cast<std::size_t>(v)] = c;
+            // Claimed: within path length 1 of a chosen operation.
+            parallel_for(threads, nt, [&](i64 ti) {
+                const i32 v = T[static_cast<std::size_t>(ti)];
+                u8 c = end_[static_cast<std::size_t>(v)];
+                for (i32 j = 0, n = fans_.nn(v); j < n && !c; ++j) c = end_[static_cast<std::size_t>(fans_.nbr(v, j))];
+                ring_[static_cast<std::size_t>(v)] = c ? -2 : -1; // reused as the claimed flag
             });
-            i64 left = 0;
-#ifdef _OPENMP
-#pragma omp parallel for num_threads(threads) schedule(static) reduction(+ : left) if (threads > 1 && ne > 2048)
-#endif
-            for (i32 e = 0; e < ne; ++e) {
-                if (!active[static_cast<std::size_t>(e)]) continue;
-                i32 vs[4];
-                const int n = touched(e, vs);
-                bool free = true;
-                for (int i = 0; i < n && free; ++i) free = !claimed[static_cast<std::size_t>(vs[i])];
-                active[static_cast<std::size_t>(e)] = free;
-                left += free;
+            next.clear();
+            for (std::size_t ai = 0; ai < A.size(); ++ai) {
+                const i32 e = A[ai];
+                bool keep = !picked[ai];
+                if (keep) {
+                    i32 vs[4];
+                    const int n = touched(e, vs);
+                    for (int i = 0; i < n && keep; ++i) keep = ring_[static_cast<std::size_t>(vs[i])] != -2;
+                }
+                if (keep) next.push_back(e);
+                else active_[static_cast<std::size_t>(e)] = 0;
             }
-            if (left == 0) break;
+            for (std::size_t ai = 0; ai < A.size(); ++ai)
+                if (picked[ai] && chosen[static_cast<std::size_t>(A[ai])]) {
+                    i32 vs[4];
+                    const int n = touched(A[ai], vs);
+                    for (int i = 0; i < n; ++i) end_[static_cast<std::size_t>(vs[i])] = 0;
+                }
+            A.swap(next);
         }
     }
 
@@ -923,10 +1013,12 @@ private:
     const Fans& fans_;
     const Edges& edges_;
     const Ops& ops_;
+    mutable std::vector<i32> best_, ring_;
+    mutable std::vector<u8> end_, mark_, active_;
 };
 
 // ---------------------------------------------------------------------------
-// The driver.
+// Input and option checks.
 
 void check_input(const Piece& in) {
     const std::size_t nv = in.key.size();
@@ -934,8 +1026,8 @@ void check_input(const Piece& in) {
         throw Error("tetiso::reduce: x, y, z and key differ in length");
     if (!in.flags.empty() && in.flags.size() != nv) throw Error("tetiso::reduce: flags and key differ in length");
     if (in.triangles.size() % 3 != 0) throw Error("tetiso::reduce: the triangle array is not a multiple of 3");
-    if (nv > static_cast<std::size_t>(std::numeric_limits<i32>::max()) ||
-        in.triangles.size() > static_cast<std::size_t>(std::numeric_limits<i32>::max()))
+    if (nv > static_cast<std::size_t>(std::numeric_limits<i32>::max() / 2) ||
+        in.triangles.size() > static_cast<std::size_t>(std::numeric_limits<i32>::max() / 2))
         throw Error("tetiso::reduce: mesh too large for 32-bit indices");
     for (std::size_t v = 1; v < nv; ++v)
         if (!(in.key[v - 1] < in.key[v]))
@@ -943,13 +1035,14 @@ void check_input(const Piece& in) {
                         " (key " + std::to_string(in.key[v]) + ")");
     for (std::size_t v = 0; v < nv; ++v)
         if (!std::isfinite(in.x[v]) || !std::isfinite(in.y[v]) || !std::isfinite(in.z[v]))
-            throw Error("tetiso::reduce: vertex (key " + std::to_string(in.key[v]) + ") has a coordinate that is not finite");
+            throw Error("tetiso::reduce: vertex (key " + std::to_string(in.key[v]) +
+                        ") has a coordinate that is not finite");
     for (std::size_t t = 0; t < in.triangle_count(); ++t) {
         const i32 a = in.triangles[3 * t], b = in.triangles[3 * t + 1], c = in.triangles[3 * t + 2];
         for (const i32 v : {a, b, c})
             if (v < 0 || static_cast<std::size_t>(v) >= nv)
-                throw Error("tetiso::reduce: triangle " + std::to_string(t) + " refers to vertex " + std::to_string(v) +
-                            " of " + std::to_string(nv));
+                throw Error("tetiso::reduce: triangle " + std::to_string(t) + " refers to vertex " +
+                            std::to_string(v) + " of " + std::to_string(nv));
         if (a == b || b == c || c == a)
             throw Error("tetiso::reduce: triangle " + std::to_string(t) + " repeats vertex (key " +
                         std::to_string(in.key[static_cast<std::size_t>(a == b || a == c ? a : b)]) + ")");
@@ -971,6 +1064,102 @@ void check_options(const ReduceOptions& o) {
     if (!(o.flip_max_dihedral_degrees >= 0.0 && o.flip_max_dihedral_degrees < 90.0))
         bad("flip_max_dihedral_degrees = " + std::to_string(o.flip_max_dihedral_degrees) + " is outside [0, 90)");
     if (o.selection_passes < 1) bad("selection_passes = " + std::to_string(o.selection_passes) + " is below 1");
+}
+
+// ---------------------------------------------------------------------------
+// Step 6: apply the chosen operations. They share no triangle and no vertex,
+// so each writes only its own elements.
+
+void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, const std::vector<u8>& chosen,
+           int threads, std::vector<u8>& vertex_alive, std::vector<u8>& triangle_alive) {
+    vertex_alive.assign(static_cast<std::size_t>(s.vertices()), 1);
+    triangle_alive.assign(static_cast<std::size_t>(s.triangles()), 1);
+    parallel_for(threads, edges.count(), [&](i64 ei) {
+        const auto e = static_cast<std::size_t>(ei);
+        if (!chosen[e]) return;
+        const i32 u = edges.v0[e], w = edges.v1[e], f1 = edges.f1[e], f2 = edges.f2[e];
+        const float err = ops.err[e];
+        if (ops.kind[e] == kFlip) {
+            i32 c = -1, d = -1;
+            for (int r = 0; r < 3; ++r) {
+                const i32 a = s.tri[static_cast<std::size_t>(3 * f1 + r)];
+                const i32 b = s.tri[static_cast<std::size_t>(3 * f2 + r)];
+                if (a != u && a != w) c = a;
+                if (b != u && b != w) d = b;
+            }
+            // f1 = (u, w, c), f2 = (w, u, d) → (c, u, d), (d, w, c).
+            const i32 g1[3] = {c, u, d}, g2[3] = {d, w, c};
+            for (int r = 0; r < 3; ++r) {
+                s.tri[static_cast<std::size_t>(3 * f1 + r)] = g1[r];
+                s.tri[static_cast<std::size_t>(3 * f2 + r)] = g2[r];
+            }
+            s.err[static_cast<std::size_t>(f1)] = err;
+            s.err[static_cast<std::size_t>(f2)] = err;
+            return;
+        }
+        const i32 keep = ops.survivor[e], gone = keep == u ? w : u;
+        if (!s.locked(keep)) { // a locked survivor is pinned: p is its own position
+            s.x[static_cast<std::size_t>(keep)] = ops.px[e];
+            s.y[static_cast<std::size_t>(keep)] = ops.py[e];
+            s.z[static_cast<std::size_t>(keep)] = ops.pz[e];
+        }
+        vertex_alive[static_cast<std::size_t>(gone)] = 0;
+        for (const i32 v : {keep, gone}) {
+            const i32 o = fans.off[static_cast<std::size_t>(v)], k = fans.k(v);
+            for (i32 j = o; j < o + k; ++j) {
+                const i32 t = fans.face[static_cast<std::size_t>(j)];
+                if (t == f1 || t == f2) {
+                    triangle_alive[static_cast<std::size_t>(t)] = 0;
+                    continue;
+                }
+                s.err[static_cast<std::size_t>(t)] = err;
+                if (v == gone)
+                    for (int r = 0; r < 3; ++r)
+                        if (s.tri[static_cast<std::size_t>(3 * t + r)] == gone)
+                            s.tri[static_cast<std::size_t>(3 * t + r)] = keep;
+            }
+        }
+    });
+}
+
+// Step 7: drop removed vertices and triangles, keeping the order of the rest
+// (so keys stay sorted). The scans are integer sums; the copies are gathers.
+void compact(Surface& s, const std::vector<u8>& vertex_alive, const std::vector<u8>& triangle_alive, int threads,
+             std::vector<i32>& remap, std::vector<i32>& scratch) {
+    const i32 nv = s.vertices(), nt = s.triangles();
+    remap.resize(static_cast<std::size_t>(nv));
+    i32 next = 0;
+    for (i32 v = 0; v < nv; ++v) remap[static_cast<std::size_t>(v)] = vertex_alive[static_cast<std::size_t>(v)] ? next++ : -1;
+    // In place: entry v moves to remap[v] <= v, so a forward sweep is safe.
+    for (i32 v = 0; v < nv; ++v) {
+        const i32 r = remap[static_cast<std::size_t>(v)];
+        if (r < 0 || r == v) continue;
+        const auto a = static_cast<std::size_t>(r), b = static_cast<std::size_t>(v);
+        s.x[a] = s.x[b];
+        s.y[a] = s.y[b];
+        s.z[a] = s.z[b];
+        s.key[a] = s.key[b];
+        s.flags[a] = s.flags[b];
+    }
+    for (auto* a : {&s.x, &s.y, &s.z}) a->resize(static_cast<std::size_t>(next));
+    s.key.resize(static_cast<std::size_t>(next));
+    s.flags.resize(static_cast<std::size_t>(next));
+    auto& tpos = scratch;
+    tpos.resize(static_cast<std::size_t>(nt));
+    i32 tn = 0;
+    for (i32 t = 0; t < nt; ++t) tpos[static_cast<std::size_t>(t)] = triangle_alive[static_cast<std::size_t>(t)] ? tn++ : -1;
+    std::vector<i32> tri(static_cast<std::size_t>(3 * tn));
+    std::vector<float> err(static_cast<std::size_t>(tn));
+    parallel_for(threads, nt, [&](i64 ti) {
+        const auto t = static_cast<std::size_t>(ti);
+        const i32 to = tpos[t];
+        if (to < 0) return;
+        for (std::size_t r = 0; r < 3; ++r)
+            tri[3 * static_cast<std::size_t>(to) + r] = remap[static_cast<std::size_t>(s.tri[3 * t + r])];
+        err[static_cast<std::size_t>(to)] = s.err[t];
+    });
+    s.tri.swap(tri);
+    s.err.swap(err);
 }
 
 } // namespace
@@ -999,38 +1188,45 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
 
     Fans fans;
     Edges edges;
-    Normals normals;
+    std::vector<FaceGeometry> geometry;
     Ops ops;
-    std::vector<i32> scratch_a, scratch_b;
-    std::vector<u8> active, chosen, vertex_alive, triangle_alive;
-    std::vector<i32> remap;
+    std::vector<i32> scratch_a, scratch_b, remap;
+    std::vector<u8> chosen, vertex_alive, triangle_alive;
+    std::vector<i32> candidate_list;
     int idle_rounds = 0;
 
-    // The first round validates the input: build_fans throws on non-manifold
-    // or misoriented input before anything is changed.
-    for (int round = 0;; ++round) {
-        build_fans(s, threads, fans, scratch_a, scratch_b);
-        if (round >= options.max_rounds) break;
-        build_edges(s, fans, threads, edges, scratch_a, scratch_b);
-        build_normals(s, threads, normals);
-        const i32 ne = edges.count();
-        ops.kind.resize(static_cast<std::size_t>(ne));
-        ops.priority.resize(static_cast<std::size_t>(ne));
-        ops.px.resize(static_cast<std::size_t>(ne));
-        ops.py.resize(static_cast<std::size_t>(ne));
-        ops.pz.resize(static_cast<std::size_t>(ne));
-        ops.err.resize(static_cast<std::size_t>(ne));
-        ops.survivor.resize(static_cast<std::size_t>(ne));
-        const Evaluator evaluate(s, fans, edges, normals, params, round);
-        parallel_for(threads, ne, [&](i64 e) { evaluate(static_cast<i32>(e), ops); });
+    ReduceStageSeconds& st = rep.stages;
+    auto now = [] { return std::chrono::steady_clock::now(); };
+    auto since = [&](auto t) { return std::chrono::duration<double>(now() - t).count(); };
 
-        active.resize(static_cast<std::size_t>(ne));
+    // The first build_fans validates the input: it throws on non-manifold or
+    // misoriented input before anything is changed.
+    for (int round = 0;; ++round) {
+        auto t0 = now();
+        build_fans(s, threads, round == 0, fans, scratch_a, scratch_b);
+        st.fans += since(t0);
+        if (round >= options.max_rounds) break;
+        t0 = now();
+        build_edges(s, fans, threads, edges, scratch_a, scratch_b);
+        st.edges += since(t0);
+        t0 = now();
+        build_geometry(s, threads, geometry);
+        st.geometry += since(t0);
+        t0 = now();
+        const i32 ne = edges.count();
+        ops.resize(static_cast<std::size_t>(ne));
+        const Evaluator evaluator(s, fans, edges, geometry, params, round);
+        parallel_for(threads, ne, [&](i64 e) { evaluator.propose(static_cast<i32>(e), ops); });
         chosen.assign(static_cast<std::size_t>(ne), 0);
-        std::size_t candidates = 0;
+        candidate_list.clear();
+        bool any_flip = false;
         for (i32 e = 0; e < ne; ++e) {
-            active[static_cast<std::size_t>(e)] = ops.kind[static_cast<std::size_t>(e)] != kNone;
-            candidates += active[static_cast<std::size_t>(e)];
+            const u8 kind = ops.kind[static_cast<std::size_t>(e)];
+            if (kind != kNone) candidate_list.push_back(e);
+            any_flip |= kind == kFlip;
         }
+        const std::size_t candidates = candidate_list.size();
+        st.propose += since(t0);
         ReduceRound stats;
         stats.round = round;
         stats.candidates = candidates;
@@ -1038,104 +1234,26 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
             rep.rounds.push_back(stats);
             break;
         }
+        t0 = now();
         const Selector selector(s, fans, edges, ops);
-        selector.select(threads, options.selection_passes, active, chosen);
-
-        // Step 6: apply. Chosen operations share no triangle and no vertex.
-        const i32 nv = s.vertices(), nt = s.triangles();
-        vertex_alive.assign(static_cast<std::size_t>(nv), 1);
-        triangle_alive.assign(static_cast<std::size_t>(nt), 1);
-        std::size_t collapses = 0, flips = 0;
+        selector.select(threads, options.selection_passes, any_flip, candidate_list, chosen,
+                        [&](i32 e) { return evaluator.legal(e, ops); });
+        st.select += since(t0);
+        t0 = now();
         for (i32 e = 0; e < ne; ++e)
             if (chosen[static_cast<std::size_t>(e)]) {
-                if (ops.kind[static_cast<std::size_t>(e)] == kCollapse) ++collapses;
-                else ++flips;
+                if (ops.kind[static_cast<std::size_t>(e)] == kCollapse) ++stats.collapses;
+                else ++stats.flips;
             }
-        parallel_for(threads, ne, [&](i64 ei) {
-            const auto e = static_cast<std::size_t>(ei);
-            if (!chosen[e]) return;
-            const i32 u = edges.v0[e], w = edges.v1[e], f1 = edges.f1[e], f2 = edges.f2[e];
-            const float err = ops.err[e];
-            if (ops.kind[e] == kFlip) {
-                i32 c = -1, d = -1;
-                for (int r = 0; r < 3; ++r) {
-                    const i32 a = s.tri[static_cast<std::size_t>(3 * f1 + r)], b = s.tri[static_cast<std::size_t>(3 * f2 + r)];
-                    if (a != u && a != w) c = a;
-                    if (b != u && b != w) d = b;
-                }
-                // f1 = (u, w, c), f2 = (w, u, d) → (c, u, d), (d, w, c).
-                const i32 g1[3] = {c, u, d}, g2[3] = {d, w, c};
-                for (int r = 0; r < 3; ++r) {
-                    s.tri[static_cast<std::size_t>(3 * f1 + r)] = g1[r];
-                    s.tri[static_cast<std::size_t>(3 * f2 + r)] = g2[r];
-                }
-                s.err[static_cast<std::size_t>(f1)] = err;
-                s.err[static_cast<std::size_t>(f2)] = err;
-                return;
-            }
-            const i32 keep = ops.survivor[e], gone = keep == u ? w : u;
-            if (!s.locked(keep)) {
-                s.x[static_cast<std::size_t>(keep)] = ops.px[e];
-                s.y[static_cast<std::size_t>(keep)] = ops.py[e];
-                s.z[static_cast<std::size_t>(keep)] = ops.pz[e];
-            }
-            vertex_alive[static_cast<std::size_t>(gone)] = 0;
-            for (const i32 v : {keep, gone}) {
-                const i32 o = fans.off[static_cast<std::size_t>(v)], k = fans.k(v);
-                for (i32 j = o; j < o + k; ++j) {
-                    const i32 t = fans.face[static_cast<std::size_t>(j)];
-                    if (t == f1 || t == f2) {
-                        triangle_alive[static_cast<std::size_t>(t)] = 0;
-                        continue;
-                    }
-                    s.err[static_cast<std::size_t>(t)] = err;
-                    if (v == gone)
-                        for (int r = 0; r < 3; ++r)
-                            if (s.tri[static_cast<std::size_t>(3 * t + r)] == gone)
-                                s.tri[static_cast<std::size_t>(3 * t + r)] = keep;
-                }
-            }
-        });
-        stats.collapses = collapses;
-        stats.flips = flips;
+        apply(s, fans, edges, ops, chosen, threads, vertex_alive, triangle_alive);
+        st.apply += since(t0);
+        t0 = now();
         rep.rounds.push_back(stats);
-
-        // Step 7: compact, keeping order.
-        if (collapses > 0) {
-            remap.resize(static_cast<std::size_t>(nv));
-            i32 next = 0;
-            for (i32 v = 0; v < nv; ++v) remap[static_cast<std::size_t>(v)] = vertex_alive[static_cast<std::size_t>(v)] ? next++ : -1;
-            for (i32 v = 0; v < nv; ++v) {
-                const i32 r = remap[static_cast<std::size_t>(v)];
-                if (r < 0) continue;
-                const auto a = static_cast<std::size_t>(r), b = static_cast<std::size_t>(v);
-                s.x[a] = s.x[b];
-                s.y[a] = s.y[b];
-                s.z[a] = s.z[b];
-                s.key[a] = s.key[b];
-                s.flags[a] = s.flags[b];
-            }
-            s.x.resize(static_cast<std::size_t>(next));
-            s.y.resize(static_cast<std::size_t>(next));
-            s.z.resize(static_cast<std::size_t>(next));
-            s.key.resize(static_cast<std::size_t>(next));
-            s.flags.resize(static_cast<std::size_t>(next));
-            i32 tn = 0;
-            for (i32 t = 0; t < nt; ++t) {
-                if (!triangle_alive[static_cast<std::size_t>(t)]) continue;
-                for (int r = 0; r < 3; ++r)
-                    s.tri[static_cast<std::size_t>(3 * tn + r)] =
-                        remap[static_cast<std::size_t>(s.tri[static_cast<std::size_t>(3 * t + r)])];
-                s.err[static_cast<std::size_t>(tn)] = s.err[static_cast<std::size_t>(t)];
-                ++tn;
-            }
-            s.tri.resize(static_cast<std::size_t>(3 * tn));
-            s.err.resize(static_cast<std::size_t>(tn));
-        }
-        idle_rounds = collapses == 0 ? idle_rounds + 1 : 0;
+        if (stats.collapses > 0) compact(s, vertex_alive, triangle_alive, threads, remap, scratch_a);
+        st.compact += since(t0);
+        idle_rounds = stats.collapses == 0 ? idle_rounds + 1 : 0;
         if (idle_rounds >= 2) break;
     }
-
     Piece out;
     out.x = std::move(s.x);
     out.y = std::move(s.y);

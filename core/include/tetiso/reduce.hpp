@@ -37,11 +37,15 @@ struct ReduceOptions {
     int threads = 1;
     // Upper bound on the number of rounds (>= 0).
     int max_rounds = 200;
-    // A collapse or flip may not create a triangle whose smallest angle is
-    // below this bound, unless the triangle it replaces was already worse
-    // (so collapses that clean up degenerate triangles stay possible).
-    // Valid range [0, 30].
-    double min_angle_degrees = 5.0;
+    // Smallest angle of the new triangles: a collapse or flip may not make
+    // the smallest angle of the region it changes smaller than
+    // min(min_angle_degrees, that region's smallest angle before), so
+    // collapses that clean up degenerate triangles stay possible but no
+    // operation creates a triangle worse than the bound out of good ones.
+    // 1 degree is the checker's "near degenerate" line; larger bounds block
+    // collapses that would later remove the input's slivers, and leave more
+    // of them (measured on the paper surface). Valid range [0, 30].
+    double min_angle_degrees = 1.0;
     // Absolute bound on the estimated distance between the reduced and the
     // input surface (an accumulated per-triangle bound built from distances
     // of moved vertices to the planes of the faces they replace; see
@@ -58,9 +62,10 @@ struct ReduceOptions {
     // minimum angle of the two faces by more than 20 %.
     bool flips = true;
     double flip_max_dihedral_degrees = 10.0;
-    // Passes of the parallel independent-set selection per round; later
-    // passes add operations that do not touch the ones already chosen.
-    int selection_passes = 4;
+    // Upper bound on the passes of the parallel independent-set selection in
+    // one round; each pass adds operations clear of those already chosen,
+    // and passes stop as soon as no operation is left to consider.
+    int selection_passes = 64;
 };
 
 struct ReduceRound {
@@ -70,11 +75,18 @@ struct ReduceRound {
     std::size_t flips = 0;
 };
 
+// Wall-clock seconds spent in each step of the rounds, summed over rounds
+// (for profiling; see reduce.cpp for the steps).
+struct ReduceStageSeconds {
+    double fans = 0, edges = 0, geometry = 0, propose = 0, select = 0, apply = 0, compact = 0;
+};
+
 struct ReduceReport {
     std::size_t triangles_in = 0, triangles_out = 0;
     std::size_t vertices_in = 0, vertices_out = 0;
     std::vector<ReduceRound> rounds;
-    double seconds = 0.0;
+    double seconds = 0.0; // the whole call, input checks included
+    ReduceStageSeconds stages;
 };
 
 // Reduces a triangulated piece. The input must be an oriented 2-manifold with

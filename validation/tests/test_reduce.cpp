@@ -1,0 +1,502 @@
+// Reduction (core/src/reduce.cpp): the reduced surface keeps the topology of
+// every component, stays a consistently oriented manifold without degenerate
+// triangles, keeps locked vertices bit for bit and border vertices on the
+// border, stays within half a lattice spacing of the input, and does not
+// depend on the thread count. Tiny exact meshes built here probe the branches
+// (needles, zero-length edges, valence-3 vertices, flips, thin handles,
+// minimal components); extracted lattice surfaces probe the whole.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "test_support.hpp"
+#include "tetiso/check.hpp"
+#include "tetiso/error.hpp"
+#include "tetiso/lattice.hpp"
+#include "tetiso/reduce.hpp"
+
+namespace tetiso {
+namespace {
+
+using test::lattice_surface;
+
+// ---------------------------------------------------------------------------
+// Meshes built in code. Keys are 0..n-1, flags 0.
+
+struct Builder {
+    Piece piece;
+    std::int32_t add(double x, double y, double z) {
+        piece.x.push_back(static_cast<float>(x));
+        piece.y.push_back(static_cast<float>(y));
+        piece.z.push_back(static_cast<float>(z));
+        piece.key.push_back(piece.key.size());
+        piece.flags.push_back(0);
+        return static_cast<std::int32_t>(piece.key.size() - 1);
+    }
+    void tri(std::int32_t a, std::int32_t b, std::int32_t c) { piece.triangles.insert(piece.triangles.end(), {a, b, c}); }
+};
+
+// Unit icosphere, normals outwards.
+Piece icosphere(int levels) {
+    const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+    std::vector<std::array<double, 3>> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                                            {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                         {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+                                         {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+    for (auto& p : v) {
+        const double n = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+        for (auto& c : p) c /= n;
+    }
+    for (int level = 0; level < levels; ++level) {
+        std::map<std::pair<int, int>, int> mid;
+        auto midpoint = [&](int a, int b) {
+            const auto key = std::minmax(a, b);
+            if (auto it = mid.find(key); it != mid.end()) return it->second;
+            std::array<double, 3> m{};
+            for (int i = 0; i < 3; ++i) m[static_cast<std::size_t>(i)] = (v[static_cast<std::size_t>(a)][static_cast<std::size_t>(i)] + v[static_cast<std::size_t>(b)][static_cast<std::size_t>(i)]) / 2;
+            const double n = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+            for (auto& c : m) c /= n;
+            v.push_back(m);
+            return mid[key] = static_cast<int>(v.size() - 1);
+        };
+        std::vector<std::array<int, 3>> g;
+        for (const auto& [a, b, c] : f) {
+            const int ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+            g.push_back({a, ab, ca});
+            g.push_back({b, bc, ab});
+            g.push_back({c, ca, bc});
+            g.push_back({ab, bc, ca});
+        }
+        f = g;
+    }
+    Builder b;
+    for (const auto& p : v) b.add(p[0], p[1], p[2]);
+    for (const auto& [x, y, z] : f) b.tri(x, y, z);
+    return b.piece;
+}
+
+// Torus around the z axis: nu segments along the ring, nv around the tube.
+Piece torus(int nu, int nv, double ring, double tube) {
+    Builder b;
+    for (int i = 0; i < nu; ++i)
+        for (int j = 0; j < nv; ++j) {
+            const double u = 2 * std::numbers::pi * i / nu, w = 2 * std::numbers::pi * j / nv;
+            b.add((ring + tube * std::cos(w)) * std::cos(u), (ring + tube * std::cos(w)) * std::sin(u), tube * std::sin(w));
+        }
+    auto id = [&](int i, int j) { return static_cast<std::int32_t>(((i + nu) % nu) * nv + (j + nv) % nv); };
+    for (int i = 0; i < nu; ++i)
+        for (int j = 0; j < nv; ++j) {
+            b.tri(id(i, j), id(i + 1, j), id(i + 1, j + 1));
+            b.tri(id(i, j), id(i + 1, j + 1), id(i, j + 1));
+        }
+    return b.piece;
+}
+
+// Flat n x n grid of unit squares in z = 0, x' = x + shear * y, each square
+// split along the diagonal from (i, j) to (i + 1, j + 1).
+Piece grid(int n, double shear = 0.0, double scale = 1.0) {
+    Builder b;
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) b.add(scale * (i + shear * j), scale * j, 0.0);
+    auto id = [&](int i, int j) { return static_cast<std::int32_t>(j * (n + 1) + i); };
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            b.tri(id(i, j), id(i + 1, j), id(i + 1, j + 1));
+            b.tri(id(i, j), id(i + 1, j + 1), id(i, j + 1));
+        }
+    return b.piece;
+}
+
+// ---------------------------------------------------------------------------
+// What every reduction must keep.
+
+void expect_valid(const Piece& in, const Piece& out, const std::string& what) {
+    SCOPED_TRACE(what);
+    const TopologyReport a = check_topology(in), b = check_topology(out);
+    EXPECT_TRUE(same_signatures(a, b));
+    EXPECT_EQ(a.components, b.components);
+    EXPECT_EQ(a.boundary_loops, b.boundary_loops);
+    EXPECT_EQ(a.euler, b.euler);
+    EXPECT_EQ(b.non_manifold_edges, 0);
+    EXPECT_EQ(b.non_manifold_vertices, 0);
+    EXPECT_EQ(b.degenerate_triangles, 0);
+    EXPECT_EQ(b.duplicate_triangles, 0);
+    EXPECT_TRUE(b.oriented);
+    EXPECT_EQ(b.referenced_vertices, b.vertices) << "every vertex left is used";
+    // Keys: sorted, unique, a subset of the input's, with the same flags.
+    EXPECT_TRUE(std::is_sorted(out.key.begin(), out.key.end()));
+    EXPECT_EQ(std::adjacent_find(out.key.begin(), out.key.end()), out.key.end());
+    ASSERT_EQ(out.flags.size(), out.key.size());
+    for (std::size_t v = 0; v < out.key.size(); ++v) {
+        const auto it = std::lower_bound(in.key.begin(), in.key.end(), out.key[v]);
+        ASSERT_TRUE(it != in.key.end() && *it == out.key[v]);
+        EXPECT_EQ(out.flags[v], in.flags[static_cast<std::size_t>(it - in.key.begin())]);
+    }
+    // Locked vertices: all there, bit for bit.
+    for (std::size_t v = 0; v < in.key.size(); ++v) {
+        if (!(in.flags[v] & kLocked)) continue;
+        const auto it = std::lower_bound(out.key.begin(), out.key.end(), in.key[v]);
+        ASSERT_TRUE(it != out.key.end() && *it == in.key[v]) << "locked vertex " << in.key[v] << " removed";
+        const auto w = static_cast<std::size_t>(it - out.key.begin());
+        EXPECT_EQ(std::bit_cast<std::uint32_t>(in.x[v]), std::bit_cast<std::uint32_t>(out.x[w]));
+        EXPECT_EQ(std::bit_cast<std::uint32_t>(in.y[v]), std::bit_cast<std::uint32_t>(out.y[w]));
+        EXPECT_EQ(std::bit_cast<std::uint32_t>(in.z[v]), std::bit_cast<std::uint32_t>(out.z[w]));
+    }
+}
+
+bool identical(const Piece& a, const Piece& b) {
+    return a.key == b.key && a.flags == b.flags && a.triangles == b.triangles && test::same_bits(a.x, b.x) &&
+           test::same_bits(a.y, b.y) && test::same_bits(a.z, b.z);
+}
+
+std::size_t interior_valence3(const Piece& p) {
+    std::map<std::pair<int, int>, int> edges;
+    std::vector<std::set<int>> nbr(p.vertex_count());
+    for (std::size_t t = 0; t < p.triangle_count(); ++t)
+        for (int r = 0; r < 3; ++r) {
+            const int a = p.triangles[3 * t + static_cast<std::size_t>(r)], b = p.triangles[3 * t + static_cast<std::size_t>((r + 1) % 3)];
+            ++edges[std::minmax(a, b)];
+            nbr[static_cast<std::size_t>(a)].insert(b);
+            nbr[static_cast<std::size_t>(b)].insert(a);
+        }
+    std::vector<bool> border(p.vertex_count(), false);
+    for (const auto& [e, n] : edges)
+        if (n == 1) border[static_cast<std::size_t>(e.first)] = border[static_cast<std::size_t>(e.second)] = true;
+    std::size_t count = 0;
+    for (std::size_t v = 0; v < p.vertex_count(); ++v) count += !border[v] && nbr[v].size() == 3;
+    return count;
+}
+
+// ---------------------------------------------------------------------------
+// Options and bad input.
+
+TEST(Reduce, RejectsPhiOutsideItsRangeAndOtherBadOptions) {
+    const Piece sphere = icosphere(1);
+    for (const double phi : {0.0, -0.5, 1.01, std::nan("")}) {
+        ReduceOptions o;
+        o.phi = phi;
+        EXPECT_THROW(reduce(sphere, o), Error) << phi;
+    }
+    ReduceOptions o;
+    o.phi = 1.0;
+    EXPECT_NO_THROW(reduce(sphere, o));
+    o.threads = -1;
+    EXPECT_THROW(reduce(sphere, o), Error);
+    o = {};
+    o.min_angle_degrees = 45;
+    EXPECT_THROW(reduce(sphere, o), Error);
+}
+
+std::string error_of(const Piece& p) {
+    try {
+        reduce(p);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(Reduce, NamesTheEdgeOrVertexOfNonManifoldInput) {
+    Builder three;
+    for (int i = 0; i < 5; ++i) three.add(i, i * i, i % 2);
+    three.tri(0, 1, 2);
+    three.tri(1, 0, 3);
+    three.tri(0, 1, 4);
+    const std::string m3 = error_of(three.piece);
+    EXPECT_NE(m3.find("edge (key 0, key 1) has 3 triangles"), std::string::npos) << m3;
+
+    Builder same;
+    for (int i = 0; i < 4; ++i) same.add(i, i * i, 0);
+    same.tri(0, 1, 2);
+    same.tri(0, 1, 3);
+    const std::string md = error_of(same.piece);
+    EXPECT_NE(md.find("edge (key 0, key 1)"), std::string::npos) << md;
+    EXPECT_NE(md.find("same direction"), std::string::npos) << md;
+
+    Builder bowtie;
+    for (int i = 0; i < 5; ++i) bowtie.add(i, i * i, 0);
+    bowtie.tri(0, 1, 2);
+    bowtie.tri(0, 3, 4);
+    const std::string mb = error_of(bowtie.piece);
+    EXPECT_NE(mb.find("vertex (key 0)"), std::string::npos) << mb;
+
+    Builder repeat;
+    for (int i = 0; i < 3; ++i) repeat.add(i, 0, 0);
+    repeat.tri(0, 1, 1);
+    EXPECT_THROW(reduce(repeat.piece), Error);
+
+    Piece unsorted = icosphere(0);
+    std::swap(unsorted.key[0], unsorted.key[1]);
+    EXPECT_THROW(reduce(unsorted), Error);
+}
+
+// ---------------------------------------------------------------------------
+// Small exact cases.
+
+TEST(Reduce, MinimalComponentsStay) {
+    // A tetrahedron, a single triangle: nothing can go.
+    Builder tet;
+    tet.add(0, 0, 0), tet.add(1, 0, 0), tet.add(0, 1, 0), tet.add(0, 0, 1);
+    tet.tri(0, 2, 1), tet.tri(0, 1, 3), tet.tri(0, 3, 2), tet.tri(1, 2, 3);
+    Builder one;
+    one.add(0, 0, 0), one.add(1, 0, 0), one.add(0, 1, 0);
+    one.tri(0, 1, 2);
+    ReduceOptions any;
+    any.phi = 1e-6;
+    any.max_normal_turn_degrees = 89;
+    for (const Piece& p : {tet.piece, one.piece}) {
+        const Piece out = reduce(p, any);
+        EXPECT_EQ(out.triangle_count(), p.triangle_count());
+        expect_valid(p, out, "minimal");
+    }
+    // An icosahedron reduced as far as the options allow stays a closed
+    // genus-0 surface of at least 4 vertices.
+    const Piece ico = icosphere(0);
+    const Piece out = reduce(ico, any);
+    EXPECT_GE(out.vertex_count(), 4u);
+    EXPECT_LT(out.triangle_count(), ico.triangle_count());
+    expect_valid(ico, out, "icosahedron");
+}
+
+TEST(Reduce, FlatDiskCollapsesAndItsBorderStaysOnTheSquareWithItsCorners) {
+    const Piece in = grid(40);
+    ReduceReport report;
+    const Piece out = reduce(in, {}, &report);
+    expect_valid(in, out, "grid");
+    EXPECT_EQ(report.triangles_in, in.triangle_count());
+    EXPECT_EQ(report.triangles_out, out.triangle_count());
+    EXPECT_LT(out.triangle_count() * 20, in.triangle_count());
+    EXPECT_NEAR(test::area(out), 1600.0, 1e-2);
+    // Border vertices slide along the border only: every vertex on the
+    // border of the output lies on the square's boundary, and the corners stay.
+    const TopologyReport r = check_topology(out);
+    EXPECT_EQ(r.boundary_loops, 1);
+    std::set<std::pair<float, float>> corners;
+    for (std::size_t v = 0; v < out.vertex_count(); ++v) {
+        EXPECT_EQ(out.z[v], 0.0f);
+        const bool on_side = out.x[v] == 0.0f || out.x[v] == 40.0f || out.y[v] == 0.0f || out.y[v] == 40.0f;
+        if (on_side) corners.insert({out.x[v], out.y[v]});
+    }
+    for (const auto& c : {std::pair{0.0f, 0.0f}, {40.0f, 0.0f}, {0.0f, 40.0f}, {40.0f, 40.0f}})
+        EXPECT_TRUE(corners.count(c)) << c.first << ", " << c.second;
+    // Every output border edge lies on a side of the square.
+    std::map<std::pair<int, int>, int> edges;
+    for (std::size_t t = 0; t < out.triangle_count(); ++t)
+        for (int k = 0; k < 3; ++k)
+            ++edges[std::minmax(out.triangles[3 * t + static_cast<std::size_t>(k)], out.triangles[3 * t + static_cast<std::size_t>((k + 1) % 3)])];
+    for (const auto& [e, n] : edges) {
+        if (n != 1) continue;
+        const auto a = static_cast<std::size_t>(e.first), b = static_cast<std::size_t>(e.second);
+        const bool same_side = (out.x[a] == out.x[b] && (out.x[a] == 0.0f || out.x[a] == 40.0f)) ||
+                               (out.y[a] == out.y[b] && (out.y[a] == 0.0f || out.y[a] == 40.0f));
+        EXPECT_TRUE(same_side) << out.x[a] << "," << out.y[a] << " - " << out.x[b] << "," << out.y[b];
+    }
+}
+
+TEST(Reduce, LockedVerticesNeverMoveNorGo) {
+    Piece in = grid(30);
+    // Lock the border of the left half and a scattered set inside.
+    for (std::size_t v = 0; v < in.vertex_count(); ++v) {
+        const bool left_border = in.x[v] == 0.0f || ((in.y[v] == 0.0f || in.y[v] == 30.0f) && in.x[v] <= 15.0f);
+        if (left_border || v % 37 == 5) in.flags[v] = kLocked;
+    }
+    // Bend it so collapses move vertices.
+    for (std::size_t v = 0; v < in.vertex_count(); ++v) in.z[v] = static_cast<float>(0.02 * in.x[v] * in.x[v]);
+    ReduceOptions o;
+    o.phi = 0.8;
+    const Piece out = reduce(in, o);
+    expect_valid(in, out, "locked grid");
+    EXPECT_LT(out.triangle_count() * 3, in.triangle_count());
+}
+
+TEST(Reduce, ZeroLengthEdgesAndNeedlesAreCleanedUp) {
+    // A flat grid whose rows come in coincident pairs: every second strip of
+    // triangles has zero area, half of its edges zero length. A few vertices
+    // are locked so not everything can simply vanish.
+    const int n = 20;
+    Builder b;
+    for (int j = 0; j <= 2 * n + 1; ++j)
+        for (int i = 0; i <= n; ++i) b.add(i, j / 2, 0.0);
+    auto id = [&](int i, int j) { return static_cast<std::int32_t>(j * (n + 1) + i); };
+    for (int j = 0; j <= 2 * n; ++j)
+        for (int i = 0; i < n; ++i) {
+            b.tri(id(i, j), id(i + 1, j), id(i + 1, j + 1));
+            b.tri(id(i, j), id(i + 1, j + 1), id(i, j + 1));
+        }
+    // Needles: pull a few vertices almost onto a neighbour.
+    for (int k = 0; k < 10; ++k) b.piece.x[static_cast<std::size_t>(id(3 + k, 2 * (k + 3)))] += 0.999f;
+    ASSERT_GT(check_topology(b.piece).degenerate_triangles, 0);
+    ReduceOptions o;
+    o.phi = 1.0; // only the short-edge, valence-3 and flip branches act
+    const Piece out = reduce(b.piece, o);
+    expect_valid(b.piece, out, "doubled rows");
+    const TopologyReport r = check_topology(out);
+    EXPECT_EQ(r.near_degenerate_triangles, 0);
+    EXPECT_NEAR(test::area(out), test::area(b.piece), 1e-3);
+}
+
+TEST(Reduce, ValenceThreeVerticesAreRemoved) {
+    // An icosphere with a vertex added at the centroid of every other
+    // triangle (in its plane, so removing it is exact).
+    const Piece base = icosphere(3);
+    Builder b;
+    b.piece = base;
+    b.piece.triangles.clear();
+    for (std::size_t t = 0; t < base.triangle_count(); ++t) {
+        const auto a = base.triangles[3 * t], c = base.triangles[3 * t + 1], d = base.triangles[3 * t + 2];
+        if (t % 2) {
+            b.tri(a, c, d);
+            continue;
+        }
+        const auto i = static_cast<std::size_t>(a), j = static_cast<std::size_t>(c), k = static_cast<std::size_t>(d);
+        const auto m = b.add((base.x[i] + base.x[j] + base.x[k]) / 3.0, (base.y[i] + base.y[j] + base.y[k]) / 3.0,
+                             (base.z[i] + base.z[j] + base.z[k]) / 3.0);
+        b.tri(a, c, m), b.tri(c, d, m), b.tri(d, a, m);
+    }
+    ASSERT_GT(interior_valence3(b.piece), 0u);
+    ReduceOptions o;
+    o.phi = 1.0;
+    o.flips = false;
+    const Piece out = reduce(b.piece, o);
+    expect_valid(b.piece, out, "split icosphere");
+    EXPECT_EQ(interior_valence3(out), 0u);
+    EXPECT_EQ(out.triangle_count(), base.triangle_count());
+}
+
+TEST(Reduce, FlipsMendTheNarrowTrianglesOfAShearedGrid) {
+    // Every square split along its long diagonal: all triangles have a 4.4°
+    // angle; flipping to the short diagonal raises a pair's to 8° and more.
+    // Rounds without collapses end the reduction after two (paper), so only
+    // the flips of two rounds happen here.
+    const Piece in = grid(12, 3.0);
+    ReduceOptions o;
+    o.phi = 1.0;
+    o.short_edge_ratio = 0.0;
+    ReduceReport report;
+    const Piece out = reduce(in, o, &report);
+    expect_valid(in, out, "sheared grid");
+    std::size_t flips = 0, collapses = 0;
+    for (const auto& r : report.rounds) {
+        flips += r.flips;
+        collapses += r.collapses;
+    }
+    EXPECT_EQ(collapses, 0u);
+    EXPECT_GE(flips, 20u);
+    const AngleStats before = check_topology(in).min_angle, after = check_topology(out).min_angle;
+    EXPECT_GE(after.min, before.min - 1e-6);
+    EXPECT_GT(after.mean, before.mean + 0.5);
+    EXPECT_EQ(after.triangles, before.triangles);
+    EXPECT_NEAR(test::area(out), test::area(in), 1e-3);
+}
+
+TEST(Reduce, ThinHandleIsNotPinchedOff) {
+    // A torus whose tube is a triangle: every ring is a non-separating
+    // 3-cycle that one careless collapse would pinch.
+    for (const int nv : {3, 4}) {
+        const Piece in = torus(200, nv, 1.0, 0.01);
+        ReduceOptions o;
+        o.phi = 0.5;
+        const Piece out = reduce(in, o);
+        expect_valid(in, out, "thin torus " + std::to_string(nv));
+        const TopologyReport r = check_topology(out);
+        ASSERT_EQ(r.per_component.size(), 1u);
+        EXPECT_EQ(r.per_component[0].genus, 1);
+        EXPECT_LT(out.triangle_count() * 4, in.triangle_count());
+    }
+}
+
+TEST(Reduce, SphereAndTorusBuiltInCode) {
+    const Piece sphere = icosphere(5);
+    ReduceOptions o;
+    o.max_error = 0.01;
+    const Piece s = reduce(sphere, o);
+    expect_valid(sphere, s, "icosphere");
+    EXPECT_LE(hausdorff(sphere, s).symmetric, 0.01 * 1.01);
+    EXPECT_GT(test::signed_volume(s) * test::signed_volume(sphere), 0) << "orientation kept";
+    const Piece ring = torus(240, 60, 1.0, 0.3);
+    const Piece t = reduce(ring, o);
+    expect_valid(ring, t, "torus");
+    EXPECT_LE(hausdorff(ring, t).symmetric, 0.01 * 1.01);
+    EXPECT_LT(t.triangle_count() * 5, ring.triangle_count());
+}
+
+// ---------------------------------------------------------------------------
+// Extracted surfaces.
+
+struct Case {
+    const char* field;
+    std::int64_t n;
+    double min_ratio; // required triangles_in / triangles_out
+};
+
+TEST(Reduce, ExtractedSurfacesKeepTopologyAndStayWithinHalfASpacing) {
+    for (const Case c : {Case{"sphere", 80, 10.0}, Case{"torus", 80, 10.0}, Case{"gyroid", 60, 2.0},
+                         Case{"paper", 60, 2.0}}) {
+        const Piece in = lattice_surface(c.n, 1, c.field);
+        const double h = Lattice(c.n).spacing();
+        ReduceOptions o;
+        o.max_error = 0.4 * h;
+        ReduceReport report;
+        const Piece out = reduce(in, o, &report);
+        expect_valid(in, out, c.field);
+        const HausdorffReport d = hausdorff(in, out);
+        EXPECT_LE(d.symmetric, 0.5 * h) << c.field;
+        EXPECT_GE(static_cast<double>(in.triangle_count()), c.min_ratio * static_cast<double>(out.triangle_count()))
+            << c.field << ": " << in.triangle_count() << " -> " << out.triangle_count();
+        EXPECT_FALSE(report.rounds.empty());
+    }
+}
+
+TEST(Reduce, SurfaceThroughMeshNodesIsCleanedUp) {
+    // x = 2.5 is a plane of lattice nodes for odd N: marching tetrahedra puts
+    // many vertices exactly on nodes, giving zero-length edges and
+    // zero-area triangles.
+    const std::int64_t n = 41;
+    const Piece in = lattice_surface(n, 1, "x - 2.5", 0.0);
+    ASSERT_GT(check_topology(in).degenerate_triangles, 0);
+    const Piece out = reduce(in);
+    expect_valid(in, out, "plane through nodes");
+    EXPECT_EQ(check_topology(out).near_degenerate_triangles, 0);
+    EXPECT_LT(out.triangle_count() * 50, in.triangle_count());
+    EXPECT_LE(hausdorff(in, out).symmetric, 0.5 * Lattice(n).spacing());
+}
+
+TEST(Reduce, InterfaceVerticesOfADomainStayLocked) {
+    const Lattice lattice(40);
+    const Decomposition decomposition(lattice, 4);
+    const auto field = make_field("paper");
+    const Piece in = extract(decomposition.make_domain(1, *field), 0.5f);
+    const auto locked = std::count_if(in.flags.begin(), in.flags.end(), [](auto f) { return (f & kLocked) != 0; });
+    ASSERT_GT(locked, 0);
+    ReduceOptions o;
+    o.max_error = 0.4 * lattice.spacing();
+    const Piece out = reduce(in, o);
+    expect_valid(in, out, "domain piece");
+    EXPECT_LT(out.triangle_count() * 2, in.triangle_count());
+}
+
+TEST(Reduce, OutputDoesNotDependOnThreadsOrRuns) {
+    const Piece in = lattice_surface(40, 1, "gyroid");
+    ReduceOptions o;
+    o.max_error = 0.4 * Lattice(40).spacing();
+    o.threads = 1;
+    const Piece a = reduce(in, o);
+    const Piece b = reduce(in, o);
+    o.threads = 2;
+    const Piece c = reduce(in, o);
+    EXPECT_TRUE(identical(a, b));
+    EXPECT_TRUE(identical(a, c));
+    EXPECT_LT(a.triangle_count(), in.triangle_count());
+}
+
+} // namespace
+} // namespace tetiso
