@@ -42,7 +42,10 @@ int main(int argc, char** argv) {
     try {
         run();
     } catch (const tetiso::JobStopped&) {
-        return 2; // rank 0 reports why
+        // Rank 0 reports the failure and exits non-zero, which fails the job.
+        // A worker that exited non-zero first would make the launcher kill
+        // rank 0 before it could say which task failed, and why.
+        return 0;
     } catch (const tetiso::Error& e) {
         if (!is_secondary_rank()) std::cerr << "tetiso: " << e.what() << '\n';
         return 2;

@@ -173,15 +173,16 @@ std::string key_text(const Surface& s, i32 v) { return std::to_string(s.key[stat
 
 struct Fans {
     std::vector<i32> off, face, next, prev;
+    std::vector<u8> corner;  // per slot: the corner (0..2) of v in its triangle
     std::vector<u8> border;
+    // Neighbours of v at ring[off[v] + v + j], j < nn(v): next of each slot,
+    // then, on the border, prev of the last slot.
+    std::vector<i32> ring;
 
     i32 k(i32 v) const { return off[static_cast<std::size_t>(v) + 1] - off[static_cast<std::size_t>(v)]; }
     // Neighbours: k of them for an interior vertex, k + 1 on the border.
     i32 nn(i32 v) const { return k(v) + border[static_cast<std::size_t>(v)]; }
-    i32 nbr(i32 v, i32 j) const {
-        const i32 o = off[static_cast<std::size_t>(v)];
-        return j < k(v) ? next[static_cast<std::size_t>(o + j)] : prev[static_cast<std::size_t>(o + j - 1)];
-    }
+    i32 nbr(i32 v, i32 j) const { return ring[static_cast<std::size_t>(off[static_cast<std::size_t>(v)] + v + j)]; }
 };
 
 enum FanProblem : u8 { kFanOk = 0, kEdgeCount, kEdgeDirection, kVertexFans };
@@ -209,6 +210,8 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
     fans.face.resize(corner.size());
     fans.next.resize(corner.size());
     fans.prev.resize(corner.size());
+    fans.corner.resize(corner.size());
+    fans.ring.resize(corner.size() + static_cast<std::size_t>(nv));
     fans.border.assign(static_cast<std::size_t>(nv), 0);
 
     // Order each fan; record the first problem per vertex.
@@ -221,20 +224,22 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
         const i32 k = fans.off[static_cast<std::size_t>(v) + 1] - o;
         if (k == 0) return;
         constexpr i32 kSmall = 48;
-        i32 tb[kSmall], ab[kSmall], bb[kSmall], ob[kSmall];
+        i32 tb[kSmall], ab[kSmall], bb[kSmall], ob[kSmall], rb[kSmall];
         std::vector<i32> heap;
-        i32 *t = tb, *a = ab, *b = bb, *order = ob;
+        i32 *t = tb, *a = ab, *b = bb, *order = ob, *rc = rb;
         if (k > kSmall) {
-            heap.resize(static_cast<std::size_t>(4 * k));
+            heap.resize(static_cast<std::size_t>(5 * k));
             t = heap.data();
             a = t + k;
             b = a + k;
             order = b + k;
+            rc = order + k;
         }
         for (i32 i = 0; i < k; ++i) {
             const i32 c = corner[static_cast<std::size_t>(o + i)];
             const i32 tri = c / 3, r = c % 3;
             t[i] = tri;
+            rc[i] = r;
             a[i] = s.tri[static_cast<std::size_t>(3 * tri + (r + 1) % 3)];
             b[i] = s.tri[static_cast<std::size_t>(3 * tri + (r + 2) % 3)];
         }
@@ -282,10 +287,14 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
             order[step] = found;
         }
         for (i32 step = 0; step < k; ++step) {
-            fans.face[static_cast<std::size_t>(o + step)] = t[order[step]];
-            fans.next[static_cast<std::size_t>(o + step)] = a[order[step]];
-            fans.prev[static_cast<std::size_t>(o + step)] = b[order[step]];
+            const auto slot = static_cast<std::size_t>(o + step);
+            fans.face[slot] = t[order[step]];
+            fans.next[slot] = a[order[step]];
+            fans.prev[slot] = b[order[step]];
+            fans.corner[slot] = static_cast<u8>(rc[order[step]]);
+            fans.ring[slot + static_cast<std::size_t>(v)] = a[order[step]];
         }
+        fans.ring[static_cast<std::size_t>(o + k + v)] = starts == 1 ? b[order[k - 1]] : -1;
         fans.border[static_cast<std::size_t>(v)] = starts == 1;
     });
     for (i32 v = 0; v < nv; ++v) {
@@ -318,6 +327,7 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
 struct Edges {
     std::vector<i32> v0, v1, f1, f2, s0, s1;
     std::vector<i32> slot, tedge;
+    std::vector<i32> opposite; // per fan slot: the edge of its triangle opposite v
     i32 count() const { return static_cast<i32>(v0.size()); }
 };
 
@@ -374,10 +384,15 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
         // Triangle edges: each is written by its tail vertex only.
         for (i32 j = 0, k = fans.k(v); j < k; ++j) {
             const i32 t = fans.face[static_cast<std::size_t>(o + j)];
-            i32 r = 0;
-            while (s.tri[static_cast<std::size_t>(3 * t + r)] != v) ++r;
-            edges.tedge[static_cast<std::size_t>(3 * t + r)] = edges.slot[static_cast<std::size_t>(o + v + j)];
+            edges.tedge[static_cast<std::size_t>(3 * t + fans.corner[static_cast<std::size_t>(o + j)])] =
+                edges.slot[static_cast<std::size_t>(o + v + j)];
         }
+    });
+    edges.opposite.resize(fans.face.size());
+    parallel_for(threads, static_cast<i64>(fans.face.size()), [&](i64 j) {
+        const auto slot = static_cast<std::size_t>(j);
+        const auto t = static_cast<std::size_t>(fans.face[slot]);
+        edges.opposite[slot] = edges.tedge[3 * t + (fans.corner[slot] + 1u) % 3u];
     });
 }
 
@@ -934,10 +949,7 @@ public:
                 }
                 // Flips of the edges opposite v touch v too.
                 for (i32 j = 0; j < k && any_flip; ++j) {
-                    const i32 t = fans_.face[static_cast<std::size_t>(o + j)];
-                    i32 r = 0;
-                    while (s_.tri[static_cast<std::size_t>(3 * t + r)] != v) ++r;
-                    const i32 e = edges_.tedge[static_cast<std::size_t>(3 * t + (r + 1) % 3)];
+                    const i32 e = edges_.opposite[static_cast<std::size_t>(o + j)];
                     if (active_[static_cast<std::size_t>(e)] && ops_.kind[static_cast<std::size_t>(e)] == kFlip &&
                         beats(e, b))
                         b = e;
@@ -1026,6 +1038,11 @@ void check_input(const Piece& in) {
         throw Error("tetiso::reduce: x, y, z and key differ in length");
     if (!in.flags.empty() && in.flags.size() != nv) throw Error("tetiso::reduce: flags and key differ in length");
     if (in.triangles.size() % 3 != 0) throw Error("tetiso::reduce: the triangle array is not a multiple of 3");
+    if (!in.error.empty() && in.error.size() != in.triangle_count())
+        throw Error("tetiso::reduce: error and triangles differ in length");
+    for (std::size_t t = 0; t < in.error.size(); ++t)
+        if (!(in.error[t] >= 0.0f && std::isfinite(in.error[t])))
+            throw Error("tetiso::reduce: triangle " + std::to_string(t) + " has an error bound that is not a finite non-negative number");
     if (nv > static_cast<std::size_t>(std::numeric_limits<i32>::max() / 2) ||
         in.triangles.size() > static_cast<std::size_t>(std::numeric_limits<i32>::max() / 2))
         throw Error("tetiso::reduce: mesh too large for 32-bit indices");
@@ -1179,7 +1196,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
 
     Surface s{in.x, in.y, in.z, in.key,
               in.flags.empty() ? std::vector<u8>(in.key.size(), 0) : in.flags, in.triangles,
-              std::vector<float>(in.triangle_count(), 0.0f)};
+              in.error.empty() ? std::vector<float>(in.triangle_count(), 0.0f) : in.error};
     ReduceReport local_report;
     ReduceReport& rep = report ? *report : local_report;
     rep = ReduceReport{};
@@ -1261,6 +1278,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     out.key = std::move(s.key);
     out.flags = std::move(s.flags);
     out.triangles = std::move(s.tri);
+    out.error = std::move(s.err);
     out.domains = in.domains;
     rep.triangles_out = out.triangle_count();
     rep.vertices_out = out.vertex_count();

@@ -46,6 +46,7 @@ public:
         put_array(piece.flags);
         put_array(piece.triangles);
         put_array(piece.domains);
+        put_array(piece.error);
     }
     std::vector<std::byte> bytes;
 
@@ -86,6 +87,7 @@ public:
         piece.flags = get_array<std::uint8_t>();
         piece.triangles = get_array<std::int32_t>();
         piece.domains = get_array<int>();
+        piece.error = get_array<float>();
         return piece;
     }
     std::string get_string() {

@@ -69,6 +69,11 @@ Piece merge_by_key(const Piece& a, const Piece& b) {
     out.triangles.reserve(a.triangles.size() + b.triangles.size());
     for (const std::int32_t v : a.triangles) out.triangles.push_back(from_a[static_cast<std::size_t>(v)]);
     for (const std::int32_t v : b.triangles) out.triangles.push_back(from_b[static_cast<std::size_t>(v)]);
+    if (!a.error.empty() || !b.error.empty()) {
+        out.error.reserve(a.triangle_count() + b.triangle_count());
+        for (const Piece* p : {&a, &b})
+            for (std::size_t t = 0; t < p->triangle_count(); ++t) out.error.push_back(p->triangle_error(t));
+    }
     std::merge(a.domains.begin(), a.domains.end(), b.domains.begin(), b.domains.end(),
                std::back_inserter(out.domains));
     return out;
@@ -238,9 +243,11 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
         sub.key.push_back(piece.key[v]);
         sub.flags.push_back(static_cast<std::uint8_t>(piece.flags[v] | (rim ? kLocked : 0)));
     }
-    for (const std::int32_t t : region)
+    for (const std::int32_t t : region) {
+        sub.error.push_back(piece.triangle_error(static_cast<std::size_t>(t)));
         for (int k = 0; k < 3; ++k)
             sub.triangles.push_back(local[static_cast<std::size_t>(piece.triangles[3 * static_cast<std::size_t>(t) + static_cast<std::size_t>(k)])]);
+    }
 
     ReduceReport reduce_report;
     const Piece reduced = reduce(sub, options.reduce_options, &reduce_report);
@@ -279,12 +286,16 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
         out.flags.push_back(piece.flags[v]);
     }
     out.triangles.reserve(piece.triangles.size());
+    out.error.reserve(piece.triangle_count());
     for (std::size_t t = 0; t < piece.triangle_count(); ++t)
-        if (!in_region[t])
+        if (!in_region[t]) {
             for (int k = 0; k < 3; ++k)
                 out.triangles.push_back(renumber[static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>(k)])]);
+            out.error.push_back(piece.triangle_error(t));
+        }
     for (const std::int32_t v : reduced.triangles)
         out.triangles.push_back(renumber[static_cast<std::size_t>(from_reduced[static_cast<std::size_t>(v)])]);
+    out.error.insert(out.error.end(), reduced.error.begin(), reduced.error.end());
     return out;
 }
 

@@ -456,6 +456,27 @@ TEST(Reduce, ExtractedSurfacesKeepTopologyAndStayWithinHalfASpacing) {
     }
 }
 
+TEST(Reduce, ErrorBoundHoldsOverRepeatedReductions) {
+    // A job reduces a region again after every seam. Each triangle carries its
+    // bound on the distance to the raw surface, so the second pass may only
+    // spend what the first left: the bound holds for the result as a whole,
+    // not per pass (reset, two passes could drift up to twice as far).
+    const std::int64_t n = 60;
+    const double h = Lattice(n).spacing();
+    const Piece in = lattice_surface(n, 1, "paper");
+    ReduceOptions o;
+    o.max_error = 0.3 * h;
+    const Piece once = reduce(in, o);
+    ASSERT_EQ(once.error.size(), once.triangle_count());
+    for (const float e : once.error) ASSERT_LE(e, o.max_error);
+    o.phi = 0.8; // a laxer criterion offers the second pass new collapses
+    const Piece twice = reduce(once, o);
+    expect_valid(in, twice, "reduced twice");
+    ASSERT_EQ(twice.error.size(), twice.triangle_count());
+    for (const float e : twice.error) ASSERT_LE(e, o.max_error);
+    EXPECT_LE(hausdorff(in, twice).symmetric, 0.5 * h);
+}
+
 TEST(Reduce, SurfaceThroughMeshNodesIsCleanedUp) {
     // x = 2.5 is a plane of lattice nodes for odd N: marching tetrahedra puts
     // many vertices exactly on nodes, giving zero-length edges and

@@ -141,6 +141,11 @@ TEST(Seam, ReductionAfterASeamStaysNearTheSeam) {
     EXPECT_GT(report.vertices_unlocked, 0u);
     EXPECT_LT(report.region_triangles, (left.triangle_count() + right.triangle_count()) / 2);
     EXPECT_LT(joined.triangle_count(), left.triangle_count() + right.triangle_count());
+    // The halves' error bounds travel through the seam: the reduction near it
+    // spends only what the halves left, so the whole stays within one bound.
+    ASSERT_EQ(joined.error.size(), joined.triangle_count());
+    EXPECT_LE(*std::max_element(joined.error.begin(), joined.error.end()), options.max_error);
+    EXPECT_GT(*std::max_element(joined.error.begin(), joined.error.end()), 0.0f);
 
     // Triangles of the inputs whose vertices are all far from the cut plane
     // (more than the region's reach) appear unchanged, by key.

@@ -64,9 +64,15 @@ struct Piece {
     std::vector<std::int32_t> triangles; // 3 vertex indices each; counter-clockwise
                                          // seen from the side of increasing field
     std::vector<int> domains;           // sorted ids of the domains this piece covers
+    // Per triangle, or empty for all zero: an upper estimate of the distance
+    // from the triangle to the raw isosurface it stands for. Reduction adds
+    // to it and keeps it under ReduceOptions::max_error, so a region reduced
+    // again after each seam still respects one bound for the whole job.
+    std::vector<float> error;
 
     std::size_t vertex_count() const { return key.size(); }
     std::size_t triangle_count() const { return triangles.size() / 3; }
+    float triangle_error(std::size_t t) const { return error.empty() ? 0.0f : error[t]; }
 };
 
 // Restores the Piece invariant after a stage that numbered vertices in
