@@ -32,7 +32,15 @@ nlohmann::json reduce_json(const ReduceReport& report) {
         rounds.push_back({{"round", r.round}, {"candidates", r.candidates}, {"collapses", r.collapses}, {"flips", r.flips}});
     return {{"triangles_in", report.triangles_in},   {"triangles_out", report.triangles_out},
             {"vertices_in", report.vertices_in},     {"vertices_out", report.vertices_out},
-            {"rounds", rounds},                      {"seconds", report.seconds}};
+            {"rounds", rounds},                      {"seconds", report.seconds},
+            {"stage_seconds",
+             {{"fans", report.stages.fans},
+              {"edges", report.stages.edges},
+              {"geometry", report.stages.geometry},
+              {"propose", report.stages.propose},
+              {"select", report.stages.select},
+              {"apply", report.stages.apply},
+              {"compact", report.stages.compact}}}};
 }
 
 namespace {

@@ -27,9 +27,11 @@
 #include "tetiso/reduce.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <initializer_list>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -444,8 +446,13 @@ double point_triangle_distance(Vec p, Vec a, Vec b, Vec c) {
 }
 
 // ---------------------------------------------------------------------------
-// Step 4: propose an operation for every edge (cheap: Φ, position, priority);
-// the legality tests run later, only for the operations the selection picks.
+// Step 4: evaluate edges: propose an operation (Φ, position, priority) and
+// run its legality tests at once, so only legal operations enter the
+// selection. (Testing only what the selection picks looks cheaper, but then
+// illegal local maxima are dropped one pass at a time and the selection
+// needs many more passes over a large active set: measured, it costs more
+// than the tests.) Edges whose answer cannot have changed since they last had
+// no legal operation are skipped (see Quiet below).
 //
 // Φ (paper): for an interior edge (u, w) with faces f1 (running u → w) and f2
 // and unit normals n1, n2, the leaf of each end is traversed from f1 away from
@@ -577,20 +584,19 @@ public:
         return r;
     }
 
-    void propose(i32 e, Ops& ops) const {
+    // Leaves ops.kind[e] = kNone unless edge e has a legal operation. An edge
+    // whose collapse is proposed but illegal may still offer a flip.
+    void evaluate(i32 e, Ops& ops) const {
         const auto i = static_cast<std::size_t>(e);
         ops.kind[i] = kNone;
         const EdgeSlots r = slots(e);
         const u64 hash = mix64(s_.key[static_cast<std::size_t>(r.u)] * 0x9e3779b97f4a7c15ULL ^
                                mix64(s_.key[static_cast<std::size_t>(r.w)] + static_cast<u64>(round_)));
-        if (propose_collapse(r, hash, ops, i)) return;
-        if (p_.flips && r.f1 >= 0 && r.f2 >= 0) propose_flip(r, hash, ops, i);
-    }
-
-    bool legal(i32 e, Ops& ops) const {
-        const auto i = static_cast<std::size_t>(e);
-        if (ops.kind[i] == kFlip) return true; // fully tested in propose_flip
-        return legal_collapse(slots(e), ops, i);
+        if (propose_collapse(r, hash, ops, i)) {
+            if (legal_collapse(r, ops, i)) return;
+            ops.kind[i] = kNone;
+        }
+        if (p_.flips && r.f1 >= 0 && r.f2 >= 0) propose_flip(r, hash, ops, i); // tests its legality itself
     }
 
 private:
@@ -875,12 +881,13 @@ private:
 // sequential choice, a scatter-max over vertices and then over their rings
 // (written as gathers, so no atomics). Two picked operations are at path
 // length >= 2, so their leaves share no face and the tests of each stay valid
-// whatever the others do. A picked operation then runs its legality tests; if
-// it fails it is dropped and claims nothing. Operations within path length 1
-// of a chosen one leave the active set, and passes repeat over the shrinking
-// active set until it is empty: the result is a maximal independent set of
-// legal operations, and an illegal operation never blocks its neighbours.
-// Ties in priority fall to the vertex keys, never to thread or order.
+// whatever the others do. Only operations that passed their legality tests
+// (step 4) take part, so an illegal operation never blocks its neighbours and
+// every picked one is applied. Operations within path length 1 of a chosen
+// one leave the active set, and passes repeat over the shrinking active set
+// until it is empty: the result is a maximal independent set of legal
+// operations. Ties in priority fall to the vertex keys, never to thread or
+// order.
 
 class Selector {
 public:
@@ -909,10 +916,8 @@ public:
         return 4;
     }
 
-    // candidates: the edges with an operation, ascending. Sets chosen[e].
-    template <class Legal>
-    void select(int threads, int max_passes, bool any_flip, std::vector<i32> candidates, std::vector<u8>& chosen,
-                const Legal& legal) const {
+    // candidates: the edges with a legal operation, ascending. Sets chosen[e].
+    void select(int threads, int max_passes, bool any_flip, std::vector<i32> candidates, std::vector<u8>& chosen) const {
         const i32 nv = s_.vertices(), ne = edges_.count();
         best_.assign(static_cast<std::size_t>(nv), -1);
         ring_.resize(static_cast<std::size_t>(nv));
@@ -965,24 +970,18 @@ public:
                 }
                 ring_[static_cast<std::size_t>(v)] = b;
             });
-            // Picked operations run their legality tests.
+            // An operation that wins at every vertex it touches is chosen.
             picked.assign(A.size(), 0);
-            const i64 na = static_cast<i64>(A.size());
-#ifdef _OPENMP
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 512) if (threads > 1 && na > kParallelMin)
-#endif
-            for (i64 ai = 0; ai < na; ++ai) {
+            parallel_for(threads, static_cast<i64>(A.size()), [&](i64 ai) {
                 const i32 e = A[static_cast<std::size_t>(ai)];
                 i32 vs[4];
                 const int n = touched(e, vs);
-                bool win = true;
-                for (int i = 0; i < n && win; ++i) win = ring_[static_cast<std::size_t>(vs[i])] == e;
-                if (!win) continue;
+                for (int i = 0; i < n; ++i)
+                    if (ring_[static_cast<std::size_t>(vs[i])] != e) return;
                 picked[static_cast<std::size_t>(ai)] = 1;
-                if (!legal(e)) continue;
                 chosen[static_cast<std::size_t>(e)] = 1;
                 for (int i = 0; i < n; ++i) end_[static_cast<std::size_t>(vs[i])] = 1;
-            }
+            });
             // Claimed: within path length 1 of a chosen operation.
             parallel_for(threads, nt, [&](i64 ti) {
                 const i32 v = T[static_cast<std::size_t>(ti)];
@@ -1003,7 +1002,7 @@ public:
                 else active_[static_cast<std::size_t>(e)] = 0;
             }
             for (std::size_t ai = 0; ai < A.size(); ++ai)
-                if (picked[ai] && chosen[static_cast<std::size_t>(A[ai])]) {
+                if (picked[ai]) {
                     i32 vs[4];
                     const int n = touched(A[ai], vs);
                     for (int i = 0; i < n; ++i) end_[static_cast<std::size_t>(vs[i])] = 0;
@@ -1085,12 +1084,17 @@ void check_options(const ReduceOptions& o) {
 
 // ---------------------------------------------------------------------------
 // Step 6: apply the chosen operations. They share no triangle and no vertex,
-// so each writes only its own elements.
+// so each writes only its own elements. changed[v] is set for every vertex
+// whose fan, or a face of it, was altered: the vertices of every face of both
+// leaves of a collapse, the four corners of a flip. Two operations may mark
+// the same vertex, hence the atomic (relaxed: the value is all that matters).
 
 void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, const std::vector<u8>& chosen,
-           int threads, std::vector<u8>& vertex_alive, std::vector<u8>& triangle_alive) {
+           int threads, std::vector<u8>& vertex_alive, std::vector<u8>& triangle_alive, std::vector<u8>& changed) {
     vertex_alive.assign(static_cast<std::size_t>(s.vertices()), 1);
     triangle_alive.assign(static_cast<std::size_t>(s.triangles()), 1);
+    changed.assign(static_cast<std::size_t>(s.vertices()), 0);
+    auto mark = [&](i32 v) { std::atomic_ref<u8>(changed[static_cast<std::size_t>(v)]).store(1, std::memory_order_relaxed); };
     parallel_for(threads, edges.count(), [&](i64 ei) {
         const auto e = static_cast<std::size_t>(ei);
         if (!chosen[e]) return;
@@ -1104,6 +1108,7 @@ void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, con
                 if (a != u && a != w) c = a;
                 if (b != u && b != w) d = b;
             }
+            for (const i32 v : {u, w, c, d}) mark(v);
             // f1 = (u, w, c), f2 = (w, u, d) → (c, u, d), (d, w, c).
             const i32 g1[3] = {c, u, d}, g2[3] = {d, w, c};
             for (int r = 0; r < 3; ++r) {
@@ -1125,6 +1130,7 @@ void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, con
             const i32 o = fans.off[static_cast<std::size_t>(v)], k = fans.k(v);
             for (i32 j = o; j < o + k; ++j) {
                 const i32 t = fans.face[static_cast<std::size_t>(j)];
+                for (int r = 0; r < 3; ++r) mark(s.tri[static_cast<std::size_t>(3 * t + r)]);
                 if (t == f1 || t == f2) {
                     triangle_alive[static_cast<std::size_t>(t)] = 0;
                     continue;
@@ -1139,10 +1145,30 @@ void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, con
     });
 }
 
+// Quiet edges. An edge's evaluation reads the positions and fans of the
+// closed 1-rings of its two ends and the error bounds of their faces. After
+// each round near[v] marks the vertices within one ring of a changed vertex:
+// an edge with neither end near saw nothing change. quiet[v] says that the
+// edges v owns (v is their smaller end) had no legal operation when last
+// evaluated; an edge whose owner is quiet and whose ends are not near still
+// has none, and step 4 skips it. Once most of the surface is as reduced as
+// the criterion and the bounds allow, a round then costs what the last one
+// changed rather than a full evaluation.
+void mark_near(const Fans& fans, int threads, const std::vector<u8>& changed, std::vector<u8>& near) {
+    const i32 nv = static_cast<i32>(changed.size());
+    near.resize(static_cast<std::size_t>(nv));
+    parallel_for(threads, nv, [&](i64 vi) {
+        const i32 v = static_cast<i32>(vi);
+        u8 c = changed[static_cast<std::size_t>(v)];
+        for (i32 j = 0, n = fans.nn(v); j < n && !c; ++j) c = changed[static_cast<std::size_t>(fans.nbr(v, j))];
+        near[static_cast<std::size_t>(v)] = c;
+    });
+}
+
 // Step 7: drop removed vertices and triangles, keeping the order of the rest
 // (so keys stay sorted). The scans are integer sums; the copies are gathers.
 void compact(Surface& s, const std::vector<u8>& vertex_alive, const std::vector<u8>& triangle_alive, int threads,
-             std::vector<i32>& remap, std::vector<i32>& scratch) {
+             std::initializer_list<std::vector<u8>*> vertex_marks, std::vector<i32>& remap, std::vector<i32>& scratch) {
     const i32 nv = s.vertices(), nt = s.triangles();
     remap.resize(static_cast<std::size_t>(nv));
     i32 next = 0;
@@ -1157,10 +1183,12 @@ void compact(Surface& s, const std::vector<u8>& vertex_alive, const std::vector<
         s.z[a] = s.z[b];
         s.key[a] = s.key[b];
         s.flags[a] = s.flags[b];
+        for (auto* m : vertex_marks) (*m)[a] = (*m)[b];
     }
     for (auto* a : {&s.x, &s.y, &s.z}) a->resize(static_cast<std::size_t>(next));
     s.key.resize(static_cast<std::size_t>(next));
     s.flags.resize(static_cast<std::size_t>(next));
+    for (auto* m : vertex_marks) m->resize(static_cast<std::size_t>(next));
     auto& tpos = scratch;
     tpos.resize(static_cast<std::size_t>(nt));
     i32 tn = 0;
@@ -1208,7 +1236,8 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     std::vector<FaceGeometry> geometry;
     Ops ops;
     std::vector<i32> scratch_a, scratch_b, remap;
-    std::vector<u8> chosen, vertex_alive, triangle_alive;
+    std::vector<u8> chosen, vertex_alive, triangle_alive, changed;
+    std::vector<u8> quiet(in.vertex_count(), 0), near(in.vertex_count(), 0);
     std::vector<i32> candidate_list;
     int idle_rounds = 0;
 
@@ -1233,14 +1262,22 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         const i32 ne = edges.count();
         ops.resize(static_cast<std::size_t>(ne));
         const Evaluator evaluator(s, fans, edges, geometry, params, round);
-        parallel_for(threads, ne, [&](i64 e) { evaluator.propose(static_cast<i32>(e), ops); });
+        parallel_for(threads, ne, [&](i64 ei) {
+            const auto e = static_cast<std::size_t>(ei);
+            const auto u = static_cast<std::size_t>(edges.v0[e]), w = static_cast<std::size_t>(edges.v1[e]);
+            if (quiet[u] && !near[u] && !near[w]) ops.kind[e] = kNone;
+            else evaluator.evaluate(static_cast<i32>(e), ops);
+        });
         chosen.assign(static_cast<std::size_t>(ne), 0);
         candidate_list.clear();
         bool any_flip = false;
+        std::fill(quiet.begin(), quiet.end(), u8{1});
         for (i32 e = 0; e < ne; ++e) {
             const u8 kind = ops.kind[static_cast<std::size_t>(e)];
-            if (kind != kNone) candidate_list.push_back(e);
+            if (kind == kNone) continue;
+            candidate_list.push_back(e);
             any_flip |= kind == kFlip;
+            quiet[static_cast<std::size_t>(edges.v0[static_cast<std::size_t>(e)])] = 0;
         }
         const std::size_t candidates = candidate_list.size();
         st.propose += since(t0);
@@ -1253,8 +1290,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         }
         t0 = now();
         const Selector selector(s, fans, edges, ops);
-        selector.select(threads, options.selection_passes, any_flip, candidate_list, chosen,
-                        [&](i32 e) { return evaluator.legal(e, ops); });
+        selector.select(threads, options.selection_passes, any_flip, candidate_list, chosen);
         st.select += since(t0);
         t0 = now();
         for (i32 e = 0; e < ne; ++e)
@@ -1262,11 +1298,12 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
                 if (ops.kind[static_cast<std::size_t>(e)] == kCollapse) ++stats.collapses;
                 else ++stats.flips;
             }
-        apply(s, fans, edges, ops, chosen, threads, vertex_alive, triangle_alive);
+        apply(s, fans, edges, ops, chosen, threads, vertex_alive, triangle_alive, changed);
+        mark_near(fans, threads, changed, near);
         st.apply += since(t0);
         t0 = now();
         rep.rounds.push_back(stats);
-        if (stats.collapses > 0) compact(s, vertex_alive, triangle_alive, threads, remap, scratch_a);
+        if (stats.collapses > 0) compact(s, vertex_alive, triangle_alive, threads, {&quiet, &near}, remap, scratch_a);
         st.compact += since(t0);
         idle_rounds = stats.collapses == 0 ? idle_rounds + 1 : 0;
         if (idle_rounds >= 2) break;
