@@ -10,6 +10,7 @@ packages=(
   libopenmpi-dev openmpi-bin                         # the MPI job
   libgtest-dev libgmock-dev libbenchmark-dev         # tests and benchmarks
   libcgal-dev libmeshoptimizer-dev                   # checker's self-intersections, reduction baseline
+  tetgen                                             # meshes/make_meshes.sh
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,23 +1,28 @@
 // `tetiso extract`: the lattice test problem, domain by domain, extracted and
-// combined by key into one surface (reduction arrives with `--reduce`).
+// combined by key into one surface, or an unstructured TetGen mesh as one
+// domain; `--reduce` reduces the result.
 #include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <limits>
 
 #include "commands.hpp"
+#include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/io.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/reduce.hpp"
 #include "tetiso/seam.hpp"
+#include "tetiso/tetgen.hpp"
 
 namespace tetiso::cli {
 namespace {
 
 struct ExtractArguments {
     std::int64_t lattice = 0;
+    std::filesystem::path mesh;        // TetGen base name, instead of --lattice
+    std::optional<int> attribute;      // with --mesh: the field is this node attribute
     int domains = 1;
     std::string field = "paper";
     std::optional<double> level;
@@ -29,15 +34,92 @@ struct ExtractArguments {
     std::filesystem::path report;
 };
 
+void report_empty(double level, float lowest, float highest) {
+    std::cerr << "tetiso: the surface is empty: level " << level
+              << (level < lowest || level > highest ? " is outside" : " is within") << " the field's range ["
+              << lowest << ", " << highest << "]\n";
+}
+
+// Mean length of the tetrahedra's edges (shared edges counted once per
+// tetrahedron): the mesh's spacing, the unit of --max-error as h is on the
+// lattice.
+double mean_edge_length(const Domain& d) {
+    double sum = 0;
+    for (std::size_t t = 0; t < d.tet_count(); ++t)
+        for (int a = 0; a < 4; ++a)
+            for (int b = a + 1; b < 4; ++b) {
+                const auto i = static_cast<std::size_t>(d.tets[4 * t + static_cast<std::size_t>(a)]);
+                const auto j = static_cast<std::size_t>(d.tets[4 * t + static_cast<std::size_t>(b)]);
+                const double dx = d.x[i] - d.x[j], dy = d.y[i] - d.y[j], dz = d.z[i] - d.z[j];
+                sum += std::sqrt(dx * dx + dy * dy + dz * dz);
+            }
+    return d.tet_count() ? sum / static_cast<double>(6 * d.tet_count()) : 0.0;
+}
+
+void run_extract_mesh(const ExtractArguments& args, const Field& field, double start) {
+    const double t0 = now_seconds();
+    const Domain domain = read_tetgen(TetgenSource{args.mesh, args.attribute, &field});
+    const double t1 = now_seconds();
+    // An attribute has no level of its own; an analytic field does.
+    const double level = args.level.value_or(args.attribute ? 0.0 : field.default_level());
+    Piece surface = extract(domain, static_cast<float>(level), ExtractOptions{args.threads});
+    const double t2 = now_seconds();
+    const auto [lo, hi] = std::minmax_element(domain.f.begin(), domain.f.end());
+    if (surface.triangle_count() == 0 && lo != domain.f.end()) report_empty(level, *lo, *hi);
+    ReduceReport reduce_report;
+    const double spacing = mean_edge_length(domain);
+    if (args.reduce) {
+        ReduceOptions options = args.reduce_options;
+        options.threads = args.threads;
+        options.max_error = args.max_error_spacings * spacing;
+        surface = tetiso::reduce(surface, options, &reduce_report);
+    }
+    const double t3 = now_seconds();
+    write_piece(surface, args.output);
+    if (args.report.empty()) return;
+    nlohmann::json report = {
+        {"command", "extract"},
+        {"mesh", args.mesh.string()},
+        {"field", args.attribute ? "attribute " + std::to_string(*args.attribute) : field.description()},
+        {"level", level},
+        {"domains", 1},
+        {"nodes", domain.node_count()},
+        {"tets", domain.tet_count()},
+        {"mean_edge_length", spacing},
+        {"threads", args.threads},
+        {"vertices", surface.vertex_count()},
+        {"triangles", surface.triangle_count()},
+        {"output", args.output.string()},
+        {"seconds",
+         {{"read", t1 - t0},
+          {"extract", t2 - t1},
+          {"reduce", reduce_report.seconds},
+          {"write", now_seconds() - t3},
+          {"total", now_seconds() - start}}},
+    };
+    if (lo != domain.f.end()) report["field_range"] = {*lo, *hi};
+    if (args.reduce) {
+        report["reduction"] = reduce_json(reduce_report);
+        report["phi"] = args.reduce_options.phi;
+        report["max_error"] = args.max_error_spacings * spacing;
+    }
+    write_report(report, args.report);
+}
+
 void run_extract(const ExtractArguments& args) {
     const double start = now_seconds();
     surface_format(args.output);
     require_writable(args.output);
     if (!args.report.empty()) require_writable(args.report);
 
+    if (args.mesh.empty() == (args.lattice == 0)) throw Error("give either --lattice or --mesh");
+    if (!args.mesh.empty() && args.domains != 1)
+        throw Error("--mesh reads one domain; --domains applies to the lattice only");
+    if (args.attribute && args.mesh.empty()) throw Error("--attribute needs --mesh");
+    const std::unique_ptr<Field> field = make_field(args.field);
+    if (!args.mesh.empty()) return run_extract_mesh(args, *field, start);
     const Lattice lattice(args.lattice);
     const Decomposition decomposition(lattice, args.domains);
-    const std::unique_ptr<Field> field = make_field(args.field);
     const double level = args.level.value_or(field->default_level());
 
     double generate_seconds = 0, extract_seconds = 0;
@@ -60,10 +142,7 @@ void run_extract(const ExtractArguments& args) {
     unlock_settled(surface, [&](GlobalId a, GlobalId b) { return decomposition.domains_of_edge(a, b); });
     const double combine_seconds = now_seconds() - t_combine;
 
-    if (surface.triangle_count() == 0)
-        std::cerr << "tetiso: the surface is empty: level " << level
-                  << (level < lowest || level > highest ? " is outside" : " is within")
-                  << " the field's range [" << lowest << ", " << highest << "]\n";
+    if (surface.triangle_count() == 0) report_empty(level, lowest, highest);
     ReduceReport reduce_report;
     if (args.reduce) {
         ReduceOptions options = args.reduce_options;
@@ -110,10 +189,15 @@ void run_extract(const ExtractArguments& args) {
 
 void add_extract_command(CLI::App& app, Command& run) {
     auto args = std::make_shared<ExtractArguments>();
-    CLI::App* cmd = app.add_subcommand("extract", "Extract the isosurface of the lattice test problem");
-    cmd->add_option("--lattice", args->lattice, "Nodes per axis of the N x N x N lattice on [0,5]^3")
-        ->required()
-        ->check(CLI::Range(std::int64_t{2}, std::int64_t{1625}));
+    CLI::App* cmd = app.add_subcommand("extract", "Extract the isosurface of the lattice test problem or of a TetGen mesh");
+    auto* lattice = cmd->add_option("--lattice", args->lattice, "Nodes per axis of the N x N x N lattice on [0,5]^3")
+                        ->check(CLI::Range(std::int64_t{2}, std::int64_t{1625}));
+    cmd->add_option("--mesh", args->mesh, "TetGen mesh BASE (reads BASE.node and BASE.ele) instead of the lattice")
+        ->excludes(lattice);
+    cmd->add_option_function<int>(
+        "--attribute", [args](int k) { args->attribute = k; },
+        "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
+        ->check(CLI::NonNegativeNumber);
     cmd->add_option("--domains", args->domains, "Number of domains (recursive coordinate bisection)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--field", args->field,
@@ -128,7 +212,7 @@ void add_extract_command(CLI::App& app, Command& run) {
     cmd->add_flag("--reduce", args->reduce, "Reduce the combined surface (parallel edge collapse and flip)");
     add_phi_option(*cmd, args->reduce_options.phi);
     cmd->add_option("--max-error", args->max_error_spacings,
-                    "With --reduce: bound on the distance to the raw surface, in lattice spacings (0: none)")
+                    "With --reduce: bound on the distance to the raw surface, in lattice spacings (mean tetrahedron edge lengths with --mesh; 0: none)")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     cmd->add_option("-o,--output", args->output, "Output surface, .ply or .vtp")->required();

@@ -45,6 +45,12 @@ expect 2 "more domains than cells" -- "$tetiso" extract --lattice 3 --domains 9 
 expect 2 "unwritable output directory" -- "$tetiso" extract --lattice 10 -o "$out/missing/s.ply"
 expect 2 "unknown output format" -- "$tetiso" extract --lattice 10 -o "$out/s.stl"
 expect 2 "check of a missing file" -- "$tetiso" check "$out/nothing.ply"
+meshes=$(cd "$(dirname "$0")/../../meshes" && pwd)
+expect 0 "extract from a TetGen mesh" -- "$tetiso" extract --mesh "$meshes/cube.1" --field torus --reduce -o "$out/t.vtp"
+expect 2 "both --mesh and --lattice" -- "$tetiso" extract --mesh "$meshes/cube.1" --lattice 10 -o "$out/t.ply"
+expect 2 "missing mesh" -- "$tetiso" extract --mesh "$out/none" -o "$out/t.ply"
+expect 2 "mesh attribute it lacks" -- "$tetiso" extract --mesh "$meshes/cube.1" --attribute 0 -o "$out/t.ply"
+expect 2 "mesh with several domains" -- "$tetiso" extract --mesh "$meshes/cube.1" --domains 4 -o "$out/t.ply"
 
 # A level outside the range: an empty surface, said so on stderr, exit 0.
 "$tetiso" extract --lattice 10 --field sphere --level 50 -o "$work/empty.ply" 2>"$work/stderr"

@@ -1,0 +1,179 @@
+// TetGen's .node/.ele files as one Domain (see tetgen.hpp). Lines are read
+// whole and split on blanks; '#' starts a comment anywhere. Every count in a
+// header is checked against the lines that follow before it sizes anything.
+#include "tetiso/tetgen.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "tetiso/error.hpp"
+
+namespace tetiso {
+namespace {
+
+// The data lines of a TetGen file: comments and blank lines dropped, each
+// line split into its fields, with its line number for messages.
+class TableFile {
+public:
+    explicit TableFile(std::filesystem::path path) : path_(std::move(path)), in_(path_) {
+        if (!in_) throw Error(path_.string() + ": cannot open");
+    }
+
+    // Reads the next data line into fields(); false at the end of the file.
+    bool next() {
+        std::string line;
+        while (std::getline(in_, line)) {
+            ++line_number_;
+            if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+            split(line);
+            if (!fields_.empty()) return true;
+        }
+        return false;
+    }
+
+    std::size_t size() const { return fields_.size(); }
+
+    template <class T>
+    T get(std::size_t i, const char* what) const {
+        if (i >= fields_.size()) fail(std::string("missing ") + what);
+        const std::string& text = fields_[i];
+        T value{};
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+        if (ec != std::errc() || end != text.data() + text.size())
+            fail(std::string(what) + " '" + text + "' is not a number of the expected kind");
+        return value;
+    }
+
+    [[noreturn]] void fail(const std::string& what) const {
+        throw Error(path_.string() + ":" + std::to_string(line_number_) + ": " + what);
+    }
+    [[noreturn]] void fail_file(const std::string& what) const { throw Error(path_.string() + ": " + what); }
+
+private:
+    void split(const std::string& line) {
+        fields_.clear();
+        std::size_t i = 0;
+        while (i < line.size()) {
+            while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r' || line[i] == ',')) ++i;
+            const std::size_t start = i;
+            while (i < line.size() && !(line[i] == ' ' || line[i] == '\t' || line[i] == '\r' || line[i] == ',')) ++i;
+            if (i > start) fields_.emplace_back(line, start, i - start);
+        }
+    }
+
+    std::filesystem::path path_;
+    std::ifstream in_;
+    std::vector<std::string> fields_;
+    std::size_t line_number_ = 0;
+};
+
+// Guards against a header that promises far more than any file could hold,
+// before anything is allocated from it.
+void check_count(const TableFile& file, std::int64_t count, const char* what) {
+    if (count < 0) file.fail(std::string("negative number of ") + what);
+    if (count > std::numeric_limits<std::int32_t>::max()) file.fail(std::string("more ") + what + " than one domain can hold");
+}
+
+double orientation(const Domain& d, std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t e) {
+    const auto p = [&](std::int32_t v, int axis) {
+        const auto i = static_cast<std::size_t>(v);
+        return static_cast<double>(axis == 0 ? d.x[i] : axis == 1 ? d.y[i] : d.z[i]);
+    };
+    double u[3], v[3], w[3];
+    for (int k = 0; k < 3; ++k) {
+        u[k] = p(b, k) - p(a, k);
+        v[k] = p(c, k) - p(a, k);
+        w[k] = p(e, k) - p(a, k);
+    }
+    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]);
+}
+
+} // namespace
+
+Domain read_tetgen(const TetgenSource& source) {
+    if (!source.attribute && !source.field) throw Error("read_tetgen: neither a field nor an attribute was given");
+    Domain domain;
+    domain.id = 0;
+
+    // Nodes: "<count> <dimension> <attributes> <markers>", then
+    // "<number> <x> <y> <z> [attributes...] [marker]".
+    TableFile node_file(std::filesystem::path(source.base.string() + ".node"));
+    if (!node_file.next()) node_file.fail_file("no header line");
+    const auto nodes = node_file.get<std::int64_t>(0, "node count");
+    check_count(node_file, nodes, "nodes");
+    if (node_file.get<int>(1, "dimension") != 3) node_file.fail("dimension is not 3");
+    const int attributes = node_file.size() > 2 ? node_file.get<int>(2, "attribute count") : 0;
+    if (attributes < 0) node_file.fail("negative attribute count");
+    if (source.attribute && (*source.attribute < 0 || *source.attribute >= attributes))
+        node_file.fail("the field is attribute " + std::to_string(source.attribute.value_or(0)) +
+                       " but the nodes have " + std::to_string(attributes) + " attribute(s)");
+    std::vector<double> px, py, pz;
+    std::int64_t first_number = 0;
+    for (std::int64_t i = 0; i < nodes; ++i) {
+        if (!node_file.next()) node_file.fail_file("the header promises " + std::to_string(nodes) + " nodes, the file has " + std::to_string(i));
+        const auto number = node_file.get<std::int64_t>(0, "node number");
+        if (i == 0) {
+            if (number != 0 && number != 1) node_file.fail("node numbers start at neither 0 nor 1");
+            first_number = number;
+        } else if (number != first_number + i) {
+            node_file.fail("node number " + std::to_string(number) + " where " + std::to_string(first_number + i) +
+                           " was expected");
+        }
+        const double x = node_file.get<double>(1, "x"), y = node_file.get<double>(2, "y"),
+                     z = node_file.get<double>(3, "z");
+        if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) node_file.fail("a coordinate is not finite");
+        px.push_back(x);
+        py.push_back(y);
+        pz.push_back(z);
+        if (source.attribute) {
+            const double value = node_file.get<double>(4 + static_cast<std::size_t>(*source.attribute), "attribute");
+            if (!std::isfinite(value)) node_file.fail("the field value is not finite");
+            domain.f.push_back(static_cast<float>(value));
+        }
+    }
+    const auto n = static_cast<std::size_t>(nodes);
+    domain.x.assign(px.begin(), px.end());
+    domain.y.assign(py.begin(), py.end());
+    domain.z.assign(pz.begin(), pz.end());
+    if (!source.attribute) {
+        domain.f.resize(n);
+        source.field->evaluate(px.data(), py.data(), pz.data(), n, domain.f.data());
+    }
+    domain.gid.resize(n);
+    for (std::size_t i = 0; i < n; ++i) domain.gid[i] = static_cast<GlobalId>(i);
+    domain.interface.assign(n, 0);
+
+    // Tetrahedra: "<count> <nodes per tet> <region attribute>", then
+    // "<number> <n0> <n1> <n2> <n3> [...]".
+    TableFile ele_file(std::filesystem::path(source.base.string() + ".ele"));
+    if (!ele_file.next()) ele_file.fail_file("no header line");
+    const auto tets = ele_file.get<std::int64_t>(0, "tetrahedron count");
+    check_count(ele_file, tets, "tetrahedra");
+    const int corners = ele_file.get<int>(1, "nodes per tetrahedron");
+    if (corners != 4 && corners != 10) ele_file.fail("nodes per tetrahedron is " + std::to_string(corners) + ", not 4 or 10");
+    for (std::int64_t t = 0; t < tets; ++t) {
+        if (!ele_file.next())
+            ele_file.fail_file("the header promises " + std::to_string(tets) + " tetrahedra, the file has " + std::to_string(t));
+        std::int32_t v[4];
+        for (int k = 0; k < 4; ++k) {
+            const auto number = ele_file.get<std::int64_t>(1 + static_cast<std::size_t>(k), "node number");
+            if (number < first_number || number >= first_number + nodes)
+                ele_file.fail("tetrahedron refers to node " + std::to_string(number) + ", which does not exist");
+            v[k] = static_cast<std::int32_t>(number - first_number);
+            for (int j = 0; j < k; ++j)
+                if (v[j] == v[k]) ele_file.fail("tetrahedron repeats node " + std::to_string(number));
+        }
+        // Extraction orients triangles from a positively oriented reference
+        // tetrahedron; TetGen's own order is not that, so fix it here.
+        if (orientation(domain, v[0], v[1], v[2], v[3]) < 0) std::swap(v[2], v[3]);
+        domain.tets.insert(domain.tets.end(), v, v + 4);
+    }
+    return domain;
+}
+
+} // namespace tetiso
