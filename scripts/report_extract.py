@@ -9,58 +9,36 @@ and writes README.md there. Python standard library only; if matplotlib is
 installed it also draws throughput.png.
 """
 import json
-import re
 import sys
 from pathlib import Path
+
+from bench_report_common import load_aggregates, machine_lines, mega, table
 
 TARGET_RATIO = 2.0  # tetiso single-thread over VTK sequential, same lattice, same run
 TARGET_PEAK_MB = 250.0  # one 10^6-node domain, generation + extraction, fresh process
 
 # Google Benchmark appends "/real_time" to the names of real-time cases.
-NAME = re.compile(r"^extract/(?P<impl>tetiso|vtk)/N:(?P<n>\d+)/threads:(?P<threads>\d+)(/real_time)?$")
+NAME = r"^extract/(?P<impl>tetiso|vtk)/N:(?P<n>\d+)/threads:(?P<threads>\d+)(/real_time)?$"
 
 
 def load_cases(path):
     """Median and coefficient of variation of every case, keyed by (impl, n, threads)."""
-    data = json.loads(path.read_text())
+    context, aggregates = load_aggregates(path, NAME, lambda m: (m["impl"], int(m["n"]), int(m["threads"])))
     cases = {}
-    for row in data["benchmarks"]:
-        match = NAME.match(row.get("run_name", ""))
-        if not match or row.get("run_type") != "aggregate":
-            continue
-        key = (match["impl"], int(match["n"]), int(match["threads"]))
-        case = cases.setdefault(key, {})
-        aggregate = row["aggregate_name"]
-        if aggregate == "median":
-            case.update(
-                time_ms=to_ms(row["real_time"], row["time_unit"]),
-                rate=row["tets/s"],
-                tets=int(row["tets"]),
-                nodes=int(row["nodes"]),
-                vertices=int(row["vertices"]),
-                triangles=int(row["triangles"]),
-                repetitions=int(row["repetitions"]),
-                label=row.get("label", ""),
-            )
-        elif aggregate == "min":
-            case["min_ms"] = to_ms(row["real_time"], row["time_unit"])
-        elif aggregate == "cv":
-            case["cv"] = row["real_time"]  # a fraction for the cv aggregate
-    return data.get("context", {}), cases
-
-
-def to_ms(value, unit):
-    return value * {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}[unit]
-
-
-def mega(value):
-    return f"{value / 1e6:.2f}"
-
-
-def table(header, rows):
-    lines = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
-    lines += ["| " + " | ".join(str(cell) for cell in row) + " |" for row in rows]
-    return "\n".join(lines)
+    for key, aggregate in aggregates.items():
+        row = aggregate["median"]
+        cases[key] = dict(
+            time_ms=aggregate["time_ms"],
+            rate=row["tets/s"],
+            tets=int(row["tets"]),
+            nodes=int(row["nodes"]),
+            vertices=int(row["vertices"]),
+            triangles=int(row["triangles"]),
+            repetitions=int(row["repetitions"]),
+            label=row.get("label", ""),
+        )
+        cases[key].update({k: aggregate[k] for k in ("min_ms", "cv") if k in aggregate})
+    return context, cases
 
 
 def throughput_section(cases):
@@ -216,20 +194,8 @@ def main():
     out += ["## Command, machine, commit", ""]
     if meta:
         out += [f"- Command: `{meta['script_cmd']}`, which ran", "",
-                "  ```", f"  {meta['bench_cmd']}"] + [f"  {cmd}" for cmd in meta["memory_cmds"]] + ["  ```", "",
-                f"- Source: {meta['source_state']}",
-                f"- Commit: `{meta['commit']}`",
-                f"- Machine: {meta['cpu_model']}, {meta['cpus']} CPUs available "
-                f"({meta['cores_per_socket']} cores per socket, {meta['threads_per_core']} thread(s) per core), "
-                f"{meta['memory']}, {meta['kernel']}",
-                f"- Compiler: {meta['compiler']}, Release (-O3), `-ffp-contract=off`",
-                f"- Environment: `{meta.get('environment', '')}`",
-                f"- Date: {meta['date']}; load average (1, 5, 15 min) before the run {meta['load_before']}, "
-                f"after {meta['load_after']}"]
-    if context:
-        out += [f"- Google Benchmark: {context.get('num_cpus', '?')} CPUs at {context.get('mhz_per_cpu', '?')} MHz, "
-                f"library built as {context.get('library_build_type', '?')} (the harness only; it adds "
-                "nothing measurable to millisecond-long iterations)"]
+                "  ```", f"  {meta['bench_cmd']}"] + [f"  {cmd}" for cmd in meta["memory_cmds"]] + ["  ```", ""]
+    out += machine_lines(meta, context)
     out += ["", "The machine is shared with other work, so single runs vary: repetitions of all cases "
             "are interleaved in random order, and the medians, fastest repetitions and coefficients of "
             "variation (cv) are reported. Regenerate with the "
