@@ -17,16 +17,13 @@
 // (mean, median, stddev, cv, min); scripts/report_extract.py reads them.
 #include <benchmark/benchmark.h>
 
-#include <algorithm>
-#include <cstdio>
-#include <cstdlib>
-#include <cstring>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
-#include <thread>
 #include <vector>
 
+#include "bench_main.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/lattice.hpp"
@@ -67,10 +64,6 @@ Problem& problem(std::int64_t n) {
     return problems.emplace(n, std::move(p)).first->second;
 }
 
-// The fastest repetition, next to the median: on a shared machine other work
-// only ever adds time, so the minimum is the least disturbed measurement.
-double minimum(const std::vector<double>& values) { return *std::min_element(values.begin(), values.end()); }
-
 void set_size_counters(benchmark::State& state, const tetiso::Domain& domain, std::int64_t vertices,
                        std::int64_t triangles) {
     const auto tets = static_cast<double>(domain.tet_count());
@@ -110,44 +103,11 @@ void bench_vtk(benchmark::State& state, std::int64_t n, int threads) {
 }
 #endif
 
-std::vector<std::int64_t> parse_sizes(const char* text) {
-    std::vector<std::int64_t> sizes;
-    for (const char* p = text; *p != '\0';) {
-        char* end = nullptr;
-        const long long value = std::strtoll(p, &end, 10);
-        if (end == p || value < 2) {
-            std::fprintf(stderr, "bench_extract: bad --sizes list '%s'\n", text);
-            std::exit(2);
-        }
-        sizes.push_back(value);
-        p = *end == ',' ? end + 1 : end;
-    }
-    return sizes;
-}
-
 } // namespace
 
 int main(int argc, char** argv) {
-    // Defaults go first so that flags given on the command line override them.
-    std::vector<char*> args{argv[0]};
-    std::string repetitions = "--benchmark_repetitions=5";
-    std::string aggregates = "--benchmark_report_aggregates_only=true";
-    args.push_back(repetitions.data());
-    args.push_back(aggregates.data());
-    std::vector<std::int64_t> sizes{100, 200};
-    for (int i = 1; i < argc; ++i) {
-        if (std::strncmp(argv[i], "--sizes=", 8) == 0)
-            sizes = parse_sizes(argv[i] + 8);
-        else
-            args.push_back(argv[i]);
-    }
-    int count = static_cast<int>(args.size());
-    benchmark::Initialize(&count, args.data());
-    if (benchmark::ReportUnrecognizedArguments(count, args.data())) return 1;
-
-    const int all_threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-    std::vector<int> thread_counts{1};
-    if (all_threads > 1) thread_counts.push_back(all_threads);
+    using namespace tetiso_bench;
+    const std::vector<std::int64_t> sizes = initialize("bench_extract", argc, argv, {100, 200});
 
     benchmark::AddCustomContext("field", "paper");
     benchmark::AddCustomContext("level", std::to_string(kLevel));
@@ -160,20 +120,11 @@ int main(int argc, char** argv) {
 #endif
 
     for (const std::int64_t n : sizes) {
-        const std::string size = "/N:" + std::to_string(n) + "/threads:";
-        for (const int threads : thread_counts)
-            benchmark::RegisterBenchmark(("extract/tetiso" + size + std::to_string(threads)).c_str(), bench_tetiso, n,
-                                         threads)
-                ->UseRealTime()
-                ->ComputeStatistics("min", minimum)
-                ->Unit(benchmark::kMillisecond);
+        for (const int threads : thread_counts())
+            register_timed(case_name("extract/tetiso", n, threads), bench_tetiso, n, threads);
 #ifdef TETISO_HAVE_VTK
-        for (const int threads : thread_counts)
-            benchmark::RegisterBenchmark(("extract/vtk" + size + std::to_string(threads)).c_str(), bench_vtk, n,
-                                         threads)
-                ->UseRealTime()
-                ->ComputeStatistics("min", minimum)
-                ->Unit(benchmark::kMillisecond);
+        for (const int threads : thread_counts())
+            register_timed(case_name("extract/vtk", n, threads), bench_vtk, n, threads);
 #endif
     }
     benchmark::RunSpecifiedBenchmarks();

@@ -33,16 +33,13 @@
 // (mean, median, stddev, cv, min); scripts/report_reduce.py reads them.
 #include <benchmark/benchmark.h>
 
-#include <algorithm>
-#include <cstdio>
-#include <cstdlib>
-#include <cstring>
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
+#include "bench_main.hpp"
 #include "tetiso/check.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/field.hpp"
@@ -147,10 +144,6 @@ const Quality& quality(Problem& p, const std::string& name, const tetiso::Piece&
     return p.quality.emplace(name, q).first->second;
 }
 
-// The fastest repetition, next to the median: on a shared machine other work
-// only ever adds time, so the minimum is the least disturbed measurement.
-double minimum(const std::vector<double>& values) { return *std::min_element(values.begin(), values.end()); }
-
 void set_counters(benchmark::State& state, const Problem& p, const Quality& q) {
     const auto in = static_cast<double>(p.raw.triangle_count());
     state.counters["tris_in/s"] =
@@ -197,44 +190,11 @@ void bench_meshopt(benchmark::State& state, std::int64_t n) {
     state.counters["meshopt_error"] = error;
 }
 
-std::vector<std::int64_t> parse_sizes(const char* text) {
-    std::vector<std::int64_t> sizes;
-    for (const char* p = text; *p != '\0';) {
-        char* end = nullptr;
-        const long long value = std::strtoll(p, &end, 10);
-        if (end == p || value < 2) {
-            std::fprintf(stderr, "bench_reduce: bad --sizes list '%s'\n", text);
-            std::exit(2);
-        }
-        sizes.push_back(value);
-        p = *end == ',' ? end + 1 : end;
-    }
-    return sizes;
-}
-
 } // namespace
 
 int main(int argc, char** argv) {
-    // Defaults go first so that flags given on the command line override them.
-    std::vector<char*> args{argv[0]};
-    std::string repetitions = "--benchmark_repetitions=5";
-    std::string aggregates = "--benchmark_report_aggregates_only=true";
-    args.push_back(repetitions.data());
-    args.push_back(aggregates.data());
-    std::vector<std::int64_t> sizes{100};
-    for (int i = 1; i < argc; ++i) {
-        if (std::strncmp(argv[i], "--sizes=", 8) == 0)
-            sizes = parse_sizes(argv[i] + 8);
-        else
-            args.push_back(argv[i]);
-    }
-    int count = static_cast<int>(args.size());
-    benchmark::Initialize(&count, args.data());
-    if (benchmark::ReportUnrecognizedArguments(count, args.data())) return 1;
-
-    const int all_threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-    std::vector<int> thread_counts{1};
-    if (all_threads > 1) thread_counts.push_back(all_threads);
+    using namespace tetiso_bench;
+    const std::vector<std::int64_t> sizes = initialize("bench_reduce", argc, argv, {100});
 
     const auto field = tetiso::make_field(kField);
     const tetiso::ReduceOptions defaults;
@@ -247,17 +207,10 @@ int main(int argc, char** argv) {
 
     for (const std::int64_t n : sizes) {
         build_problem(n);
-        const std::string size = "/N:" + std::to_string(n) + "/threads:";
-        for (const int threads : thread_counts)
-            benchmark::RegisterBenchmark(("reduce/tetiso" + size + std::to_string(threads)).c_str(), bench_tetiso, n,
-                                         threads)
-                ->UseRealTime()
-                ->ComputeStatistics("min", minimum)
-                ->Unit(benchmark::kMillisecond);
-        benchmark::RegisterBenchmark(("reduce/meshopt" + size + "1").c_str(), bench_meshopt, n)
-            ->UseRealTime()
-            ->ComputeStatistics("min", minimum)
-            ->Unit(benchmark::kMillisecond);
+        for (const int threads : thread_counts())
+            register_timed(case_name("reduce/tetiso", n, threads), bench_tetiso, n, threads);
+        // meshoptimizer is serial: one case, named like the others.
+        register_timed(case_name("reduce/meshopt", n, 1), bench_meshopt, n);
     }
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();

@@ -23,16 +23,9 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
+source "$root/scripts/bench_common.sh"
 
-commit_rev=""
-bench_flags=()
-while [[ $# -gt 0 ]]; do
-  case "$1" in
-    --commit) commit_rev=$2; shift 2 ;;
-    --) shift; bench_flags=("$@"); break ;;
-    *) echo "bench_extract.sh: unknown argument $1" >&2; exit 2 ;;
-  esac
-done
+bench_parse_args "$@"
 
 build=${BUILD_DIR:-$root/build-bench}
 jobs=${JOBS:-2}
@@ -42,27 +35,8 @@ memory_n=${MEMORY_N:-100}
 export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
 out=$root/results/extract
 
-if [[ -n $commit_rev ]]; then
-  commit=$(git rev-parse --verify "$commit_rev^{commit}")
-  source_dir=$build/snapshot-${commit:0:12}
-  build_dir=$build/snapshot-${commit:0:12}-build
-  if [[ ! -d $source_dir ]]; then
-    mkdir -p "$source_dir.tmp"
-    git archive "$commit" | tar -x -C "$source_dir.tmp"
-    mv "$source_dir.tmp" "$source_dir"
-  fi
-  source_state="committed tree $commit (exported with git archive)"
-else
-  commit=$(git rev-parse HEAD)
-  source_dir=$root
-  build_dir=$build
-  # Only these paths go into the benchmark programs.
-  changed=$(git status --porcelain -- CMakeLists.txt core reference bench | awk '{print $2}' | paste -sd' ')
-  source_state="working tree on $commit${changed:+, with uncommitted changes in: $changed}"
-fi
-
-cmake -S "$source_dir" -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release \
-  -DTETISO_BENCH=ON -DTETISO_REFERENCE=ON -DTETISO_TESTS=OFF >/dev/null
+bench_select_source CMakeLists.txt core reference bench
+bench_configure
 cmake --build "$build_dir" -j "$jobs" --target extract_benchmarks
 bin=$build_dir/bench
 if [[ ! -x $bin/bench_extract ]]; then
@@ -70,14 +44,7 @@ if [[ ! -x $bin/bench_extract ]]; then
   exit 1
 fi
 
-mkdir -p "$out"
-bench_cmd=("$bin/bench_extract" "--sizes=$sizes" "--benchmark_repetitions=$repetitions"
-  "--benchmark_report_aggregates_only=true" "--benchmark_enable_random_interleaving=true"
-  "--benchmark_out_format=json"
-  "--benchmark_out=$out/bench_extract.json" "${bench_flags[@]}")
-load_before=$(cut -d' ' -f1-3 /proc/loadavg)
-"${bench_cmd[@]}"
-load_after=$(cut -d' ' -f1-3 /proc/loadavg)
+bench_run bench_extract
 
 # Peak memory: a fresh process per measurement, so nothing else is resident.
 memory_cmds=("$bin/bench_extract_memory --n=$memory_n --method=tetiso --threads=1"
@@ -90,11 +57,9 @@ for cmd in "${memory_cmds[@]}"; do
   $cmd >>"$out/memory.jsonl"
 done
 
-# Paths in the report are relative to the repository, not this machine.
-relative() { local text=$*; echo "${text//$root\//}"; }
 BENCH_CMD=$(relative "${bench_cmd[*]}") \
 MEMORY_CMDS=$(relative "$(printf '%s\n' "${memory_cmds[@]}")") \
-SCRIPT_CMD="scripts/bench_extract.sh${commit_rev:+ --commit $commit_rev}${bench_flags[*]:+ -- ${bench_flags[*]}}" \
+SCRIPT_CMD=$(bench_script_cmd) \
 SOURCE_STATE=$(relative "$source_state") \
 COMMIT=$commit \
 CPU_MODEL=$(lscpu | sed -n 's/^Model name:[[:space:]]*//p' | head -n1) \
@@ -105,7 +70,7 @@ MEMORY=$(free -g | awk '/^Mem:/ {print $2 " GiB"}') \
 KERNEL=$(uname -sr) \
 COMPILER=$(c++ --version | head -n1) \
 LOAD_BEFORE=$load_before LOAD_AFTER=$load_after \
-ENVIRONMENT="OMP_WAIT_POLICY=$OMP_WAIT_POLICY${OMP_NUM_THREADS:+ OMP_NUM_THREADS=$OMP_NUM_THREADS}${GLIBC_TUNABLES:+ GLIBC_TUNABLES=$GLIBC_TUNABLES}" \
+ENVIRONMENT=$(bench_environment) \
 DATE=$(date -u +%Y-%m-%dT%H:%M:%SZ) \
 python3 - "$out/meta.json" <<'EOF'
 import json, os, sys

@@ -3,7 +3,7 @@
 writer for the benchmark drivers (scripts/bench_*.sh).
 
 As a library: reading Google Benchmark aggregates, number formatting, Markdown
-tables, and the "Command, machine, commit" lines of a report.
+tables, and the "Command, machine, commit" section that closes a report.
 
 As a command:
   bench_report_common.py meta OUT.json key=value...
@@ -80,6 +80,25 @@ def machine_lines(meta, context):
         lines.append(f"- Google Benchmark: {context.get('num_cpus', '?')} CPUs at {context.get('mhz_per_cpu', '?')} "
                      f"MHz, library built as {context.get('library_build_type', '?')} (the harness only; it adds "
                      "nothing measurable to millisecond-long iterations)")
+    return lines
+
+
+def command_section(meta, context, regenerate):
+    """The "Command, machine, commit" section that closes a report: the
+    driver's command and what it ran (meta's bench_cmd, then its memory_cmds
+    where it has any), machine_lines, and how the numbers were taken.
+    regenerate is the report script's own command line, which rewrites the
+    README from the JSON alone."""
+    lines = ["## Command, machine, commit", ""]
+    if meta:
+        ran = [meta["bench_cmd"], *meta.get("memory_cmds", [])]
+        lines += [f"- Command: `{meta['script_cmd']}`, which ran", "", "  ```"]
+        lines += [f"  {cmd}" for cmd in ran] + ["  ```", ""]
+    lines += machine_lines(meta, context)
+    lines += ["", "The machine is shared with other work, so single runs vary: repetitions of all cases are "
+              "interleaved in random order, and the medians, fastest repetitions and coefficients of variation "
+              f"(cv) are reported. Regenerate with the command above; `{regenerate}` rewrites this file from the "
+              "JSON alone.", ""]
     return lines
 
 

@@ -12,7 +12,7 @@ import json
 import sys
 from pathlib import Path
 
-from bench_report_common import load_aggregates, machine_lines, mega, table
+from bench_report_common import command_section, load_aggregates, mega, table
 
 TARGET_RATIO = 2.0  # tetiso single-thread over VTK sequential, same lattice, same run
 TARGET_PEAK_MB = 250.0  # one 10^6-node domain, generation + extraction, fresh process
@@ -191,16 +191,7 @@ def main():
             "`vtkStaticEdgeLocatorTemplate`) on the parallel TBB backend. Parallel cases use the default "
             "backend with `vtkSMPTools::Initialize(threads)`.", ""]
 
-    out += ["## Command, machine, commit", ""]
-    if meta:
-        out += [f"- Command: `{meta['script_cmd']}`, which ran", "",
-                "  ```", f"  {meta['bench_cmd']}"] + [f"  {cmd}" for cmd in meta["memory_cmds"]] + ["  ```", ""]
-    out += machine_lines(meta, context)
-    out += ["", "The machine is shared with other work, so single runs vary: repetitions of all cases "
-            "are interleaved in random order, and the medians, fastest repetitions and coefficients of "
-            "variation (cv) are reported. Regenerate with the "
-            "command above; `scripts/report_extract.py results/extract` rewrites this file from the "
-            "JSON alone.", ""]
+    out += command_section(meta, context, "scripts/report_extract.py results/extract")
     (directory / "README.md").write_text("\n".join(out))
 
 

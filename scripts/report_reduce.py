@@ -11,7 +11,7 @@ import json
 import sys
 from pathlib import Path
 
-from bench_report_common import load_aggregates, machine_lines, table
+from bench_report_common import command_section, load_aggregates, table
 
 TARGET_N = 100           # the lattice the targets below are stated for
 TARGET_REDUCTION = 10.0  # raw triangles over tetiso's, paper field, default Φ*
@@ -202,14 +202,7 @@ def main():
             "answers only for meshes CGAL can take as a halfedge mesh without splitting vertices, so a "
             "non-manifold output is reported as not measured, and its non-manifold counts say why.", ""]
 
-    out += ["## Command, machine, commit", ""]
-    if meta:
-        out += [f"- Command: `{meta['script_cmd']}`, which ran", "", "  ```", f"  {meta['bench_cmd']}", "  ```", ""]
-    out += machine_lines(meta, context)
-    out += ["", "The machine is shared with other work, so single runs vary: repetitions of all cases are "
-            "interleaved in random order, and the medians, fastest repetitions and coefficients of variation "
-            "(cv) are reported. Regenerate with the command above; `scripts/report_reduce.py results/reduce` "
-            "rewrites this file from the JSON alone.", ""]
+    out += command_section(meta, context, "scripts/report_reduce.py results/reduce")
     (directory / "README.md").write_text("\n".join(out))
 
 
