@@ -1180,24 +1180,27 @@ void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, con
     });
 }
 
-// Quiet edges. An edge's evaluation reads the positions and fans of the
-// closed 1-rings of its two ends and the error bounds of their faces. After
-// each round near[v] marks the vertices within one ring of a changed vertex:
-// an edge with neither end near saw nothing change. quiet[v] says that the
-// edges v owns (v is their smaller end) had no legal operation when last
-// evaluated; an edge whose owner is quiet and whose ends are not near still
-// has none, and step 4 skips it. Once most of the surface is as reduced as
-// the criterion and the bounds allow, a round then costs what the last one
-// changed rather than a full evaluation.
-void mark_near(const Fans& fans, int threads, const std::vector<u8>& changed, std::vector<u8>& near) {
-    const i32 nv = static_cast<i32>(changed.size());
-    near.resize(static_cast<std::size_t>(nv));
-    parallel_for(threads, nv, [&](i64 vi) {
-        const i32 v = static_cast<i32>(vi);
-        u8 c = changed[static_cast<std::size_t>(v)];
-        for (i32 j = 0, n = fans.nn(v); j < n && !c; ++j) c = changed[static_cast<std::size_t>(fans.nbr(v, j))];
-        near[static_cast<std::size_t>(v)] = c;
-    });
+// Quiet edges. An edge's answer (its proposal and legality) reads the fans
+// of its two ends — their faces, those faces' corners' positions and error
+// bounds — and the fans of the two opposite vertices (valences, the flip's
+// diagonal). A collapse changes the fans of exactly the vertices of its two
+// leaves' faces and moves only the survivor, whose neighbours are among
+// them; a flip changes the fans of its four corners. So an edge none of whose
+// four vertices apply() marked has the answer it had last round. quiet[v]
+// says that the edges v owns (v is their smaller end) had no operation that
+// was not found illegal; an edge whose owner is quiet and whose four vertices
+// are unchanged is skipped. Once most of the surface is as reduced as the
+// criterion and the bounds allow, a round costs what the last one changed
+// rather than a full evaluation.
+bool unchanged(const Surface& s, const Edges& edges, const std::vector<u8>& changed, std::size_t e) {
+    const i32 u = edges.v0[e], w = edges.v1[e];
+    if (changed[static_cast<std::size_t>(u)] || changed[static_cast<std::size_t>(w)]) return false;
+    for (const i32 f : {edges.f1[e], edges.f2[e]}) {
+        if (f < 0) continue;
+        for (int r = 0; r < 3; ++r)
+            if (changed[static_cast<std::size_t>(s.tri[static_cast<std::size_t>(3 * f + r)])]) return false;
+    }
+    return true;
 }
 
 // Step 7: drop removed vertices and triangles, keeping the order of the rest
@@ -1271,8 +1274,8 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     std::vector<FaceGeometry> geometry;
     Ops ops;
     std::vector<i32> scratch_a, scratch_b, remap;
-    std::vector<u8> chosen, refused, vertex_alive, triangle_alive, changed;
-    std::vector<u8> quiet(in.vertex_count(), 0), near(in.vertex_count(), 0);
+    std::vector<u8> chosen, refused, vertex_alive, triangle_alive;
+    std::vector<u8> quiet(in.vertex_count(), 0), changed(in.vertex_count(), 0);
     std::vector<i32> candidate_list;
     int idle_rounds = 0;
 
@@ -1299,8 +1302,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         const Evaluator evaluator(s, fans, edges, geometry, params, round);
         parallel_for(threads, ne, [&](i64 ei) {
             const auto e = static_cast<std::size_t>(ei);
-            const auto u = static_cast<std::size_t>(edges.v0[e]), w = static_cast<std::size_t>(edges.v1[e]);
-            if (quiet[u] && !near[u] && !near[w]) ops.kind[e] = kNone;
+            if (quiet[static_cast<std::size_t>(edges.v0[e])] && unchanged(s, edges, changed, e)) ops.kind[e] = kNone;
             else evaluator.propose(static_cast<i32>(e), ops);
         });
         chosen.assign(static_cast<std::size_t>(ne), 0);
@@ -1337,11 +1339,10 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
                 else ++stats.flips;
             }
         apply(s, fans, edges, ops, chosen, threads, vertex_alive, triangle_alive, changed);
-        mark_near(fans, threads, changed, near);
         st.apply += since(t0);
         t0 = now();
         rep.rounds.push_back(stats);
-        if (stats.collapses > 0) compact(s, vertex_alive, triangle_alive, threads, {&quiet, &near}, remap, scratch_a);
+        if (stats.collapses > 0) compact(s, vertex_alive, triangle_alive, threads, {&quiet, &changed}, remap, scratch_a);
         st.compact += since(t0);
         idle_rounds = stats.collapses == 0 ? idle_rounds + 1 : 0;
         if (idle_rounds >= 2) break;
