@@ -493,6 +493,8 @@ double point_triangle_distance(Vec p, Vec a, Vec b, Vec c) {
 // Legality (all must hold, else the operation is dropped):
 //  - link condition: the common neighbours of u and w are exactly the
 //    opposite vertices (two inside, one on the border);
+//  - no new edge joins two locked vertices (a piece across an interface may
+//    create the same edge, and seaming would give it 3 or 4 triangles);
 //  - every vertex keeps at least 3 neighbours (2 on the border), so no
 //    component drops below a tetrahedron; a border loop keeps 3 edges;
 //  - every surviving face of the two leaves keeps its orientation (normal
@@ -764,6 +766,17 @@ private:
                 }
         }
         if (common != (border_edge ? 1 : 2)) return false;
+        // No new edge between two locked vertices: the piece across the
+        // interface (or, after a seam, the rest of the piece around the
+        // reduced region) may hold the same edge, and once merged by key it
+        // would have three or four triangles. A collapse joins the survivor
+        // to the other end's neighbours; only a locked survivor can do harm.
+        const i32 keep = ops.survivor[i], gone = keep == u ? w : u;
+        if (s_.locked(keep))
+            for (i32 j = 0, n = fans_.nn(gone); j < n; ++j) {
+                const i32 x = fans_.nbr(gone, j);
+                if (x != keep && x != c && x != d && s_.locked(x)) return false;
+            }
         // Valences, border loops.
         if (nu + nw - 2 - common < ((border(u) || border(w)) ? 2 : 3)) return false;
         for (const i32 o : {c, d})
@@ -851,6 +864,7 @@ private:
         if (fans_.nn(u) - 1 < (border(u) ? 2 : 3) || fans_.nn(w) - 1 < (border(w) ? 2 : 3)) return false;
         for (i32 j = 0, n = fans_.nn(c); j < n; ++j)
             if (fans_.nbr(c, j) == d) return false;
+        if (s_.locked(c) && s_.locked(d)) return false; // see legal_collapse: no new locked-locked edge
         // Error: the gap between the two diagonals.
         const Vec axis = cross(pw - pu, pd - pc);
         const double axis_len = norm(axis);

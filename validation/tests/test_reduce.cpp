@@ -318,6 +318,34 @@ TEST(Reduce, LockedVerticesNeverMoveNorGo) {
     EXPECT_LT(out.triangle_count() * 3, in.triangle_count());
 }
 
+// Edges between two locked vertices, as key pairs.
+std::set<std::pair<EdgeKey, EdgeKey>> locked_edges(const Piece& p) {
+    std::set<std::pair<EdgeKey, EdgeKey>> out;
+    for (std::size_t t = 0; t < p.triangle_count(); ++t)
+        for (std::size_t k = 0; k < 3; ++k) {
+            const auto a = static_cast<std::size_t>(p.triangles[3 * t + k]);
+            const auto b = static_cast<std::size_t>(p.triangles[3 * t + (k + 1) % 3]);
+            if ((p.flags[a] & kLocked) && (p.flags[b] & kLocked)) out.insert(std::minmax(p.key[a], p.key[b]));
+        }
+    return out;
+}
+
+TEST(Reduce, NoNewEdgeJoinsTwoLockedVertices) {
+    // Two pieces that share locked vertices must not both grow the same chord
+    // between them: merged by key, it would have four triangles (a crash seen
+    // at N = 300, 63 domains). So no reduction may create a locked-locked edge.
+    Piece in = grid(12);
+    for (std::size_t v = 0; v < in.vertex_count(); ++v) {
+        const std::size_t i = v % 13, j = v / 13;
+        if (i == 0 || j == 0 || i == 12 || j == 12) in.flags[v] = kLocked;
+    }
+    const Piece out = reduce(in);
+    expect_valid(in, out, "grid with a locked border");
+    EXPECT_LT(out.triangle_count(), in.triangle_count() / 4);
+    const auto before = locked_edges(in), after = locked_edges(out);
+    for (const auto& e : after) EXPECT_TRUE(before.count(e)) << "new edge " << e.first << "-" << e.second;
+}
+
 TEST(Reduce, ZeroLengthEdgesAndNeedlesAreCleanedUp) {
     // A flat grid whose rows come in coincident pairs: every second strip of
     // triangles has zero area, half of its edges zero length. A few vertices
