@@ -38,6 +38,15 @@ public:
         put<std::uint64_t>(values.size());
         append(values.data(), values.size() * sizeof(T));
     }
+    // Bytes that put_piece(piece) appends: reserving them first keeps a
+    // large reply from growing by doubling, which on the root seam's worker
+    // held up to twice the surface's size at once.
+    static std::size_t piece_size(const Piece& piece) {
+        const auto array = [](const auto& v) { return sizeof(std::uint64_t) + v.size() * sizeof(v[0]); };
+        return array(piece.x) + array(piece.y) + array(piece.z) + array(piece.key) + array(piece.flags) +
+               array(piece.triangles) + array(piece.domains) + array(piece.error);
+    }
+    void reserve(std::size_t more) { bytes.reserve(bytes.size() + more); }
     void put_piece(const Piece& piece) {
         put_array(piece.x);
         put_array(piece.y);
@@ -122,20 +131,25 @@ void work(const Job& job) {
     send({}, 0, kReady);
     for (;;) {
         MPI_Status status;
-        const std::vector<std::byte> message = receive(0, status);
+        std::vector<std::byte> message = receive(0, status);
         if (status.MPI_TAG == kStop) {
             Unpacker in(message);
             if (in.get<std::int32_t>() != 0) throw JobStopped();
             return;
         }
-        Unpacker in(message);
-        const auto task = in.get<std::int32_t>();
-        const auto pieces = in.get<std::int32_t>();
+        std::int32_t task = 0;
         std::optional<Piece> left, right;
-        if (pieces == 2) {
-            left = in.get_piece();
-            right = in.get_piece();
+        {
+            Unpacker in(message);
+            task = in.get<std::int32_t>();
+            if (in.get<std::int32_t>() == 2) {
+                left = in.get_piece();
+                right = in.get_piece();
+            }
         }
+        // The pieces are unpacked: the message's copy of them would only
+        // add to the task's peak memory.
+        std::vector<std::byte>().swap(message);
         TaskRecord record;
         Packer out;
         const auto started = std::chrono::steady_clock::now();
@@ -147,6 +161,7 @@ void work(const Job& job) {
             out.put(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
             out.put(record.triangles_in);
             out.put(record.triangles_out);
+            out.reserve(Packer::piece_size(piece));
             out.put_piece(piece);
             send(out.bytes, 0, kResult);
         } catch (const std::exception& e) {
@@ -181,6 +196,8 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
         out.put<std::int32_t>(task);
         out.put<std::int32_t>(n.left >= 0 ? 2 : 0);
         if (n.left >= 0) {
+            out.reserve(Packer::piece_size(*pieces[static_cast<std::size_t>(n.left)]) +
+                        Packer::piece_size(*pieces[static_cast<std::size_t>(n.right)]));
             out.put_piece(*pieces[static_cast<std::size_t>(n.left)]);
             out.put_piece(*pieces[static_cast<std::size_t>(n.right)]);
             pieces[static_cast<std::size_t>(n.left)].reset();
