@@ -31,9 +31,8 @@ struct ReduceOptions {
     // fan, cos(α) when a face of a leaf turns by α from its side's reference
     // face. Valid range (0, 1]. The default 0.9 lets a leaf bend by about 25°.
     // On the paper's test surface (N = 100) max_error decides the ratio more
-    // than phi does: 3.6x fewer triangles at max_error 0.25 h, 10x at 1 h
-    // (measured Hausdorff 0.21 h and 0.44 h), 16x with no bound (1.4 h);
-    // see results/reduce.
+    // than phi does: see results/reduce/bound_sweep.md (about 3.6x fewer
+    // triangles at 0.25 h, 10x at 1 h).
     double phi = 0.9;
     // Threads; 0 means OpenMP's default. The output does not depend on it.
     int threads = 1;

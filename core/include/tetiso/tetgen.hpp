@@ -32,7 +32,8 @@ struct TetgenSource {
 // missing file or header, counts that disagree with the lines present, node
 // numbers that are not consecutive, a tetrahedron that refers to a node that
 // does not exist or repeats one, coordinates or values that are not finite,
-// more nodes than an edge key can hold, or an attribute the file lacks.
+// more nodes or tetrahedra than one domain's 32-bit indices can hold, or an
+// attribute the file lacks.
 Domain read_tetgen(const TetgenSource& source);
 
 } // namespace tetiso
