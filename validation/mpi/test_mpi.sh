@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # The MPI job end to end: the same surface for any number of ranks, the
-# topology of the D = 1 raw surface after seaming and reduction, and a failing
-# task ending every rank with no output. Usage: test_mpi.sh tetiso mpiexec
+# topology of the D = 1 raw surface after seaming and reduction, a failing
+# task ending every rank with no output, and rank 0 running the last seams.
+# Usage: test_mpi.sh tetiso mpiexec [test_mpi_failure]
 set -u
 tetiso=$1
 mpiexec=${2:-mpirun}
+failure_test=${3:-}
 here=$(cd "$(dirname "$0")" && pwd)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -56,19 +58,40 @@ else
 fi
 
 # 4. The report holds one record per task, and the timeline plot is drawn.
-python3 - "$work/k4.json" <<'PY' && ok || fail "report of the 4-rank run"
+#    Rank 0 runs the root seam, only seams, and only while no other task runs
+#    (schedule_mpi.cpp), for any number of workers.
+for k in 2 3 4; do
+    python3 - "$work/k$k.json" "$k" <<'PY' && ok || fail "report of the $k-rank run"
 import json, sys
 r = json.load(open(sys.argv[1]))
+k = int(sys.argv[2])
 tasks = r["tasks"]
-assert r["ranks"] == 4 and len(tasks) == 2 * r["domains"] - 1, (r["ranks"], len(tasks))
+assert r["ranks"] == k and len(tasks) == 2 * r["domains"] - 1, (r["ranks"], len(tasks))
 assert sum(t["kind"] == "domain" for t in tasks) == r["domains"]
-assert {t["rank"] for t in tasks} <= {1, 2, 3}
+assert {t["rank"] for t in tasks} <= set(range(k))
 assert all(0 <= t["start"] <= t["end"] for t in tasks)
 assert r["triangles"] < r["raw_triangles"]
+root = [t for t in tasks if t["domain_count"] == r["domains"]]
+assert len(root) == 1 and root[0]["rank"] == 0, root
+for mine in (t for t in tasks if t["rank"] == 0):
+    assert mine["kind"] == "seam", mine
+    for other in tasks:
+        if other is not mine:
+            assert other["end"] <= mine["start"] + 1e-6 or other["start"] >= mine["end"] - 1e-6, (mine, other)
 PY
+done
 if python3 -c "import matplotlib" 2>/dev/null; then
     python3 "$here/../../scripts/plot_timeline.py" "$work/k4.json" -o "$work/timeline.png" && [ -s "$work/timeline.png" ] && ok ||
         fail "timeline plot"
+fi
+
+# 5. A task that throws on rank 0 (the root seam) ends the job as a worker's
+#    failure does; see test_mpi_failure.cpp.
+if [ -n "$failure_test" ]; then
+    for k in 2 3; do
+        mpi "$k" "$failure_test" >"$work/failure.out" 2>&1 && ok ||
+            fail "test_mpi_failure with $k ranks: $(head -c 600 "$work/failure.out")"
+    done
 fi
 
 echo "$passed passed, $failures failed"

@@ -5,9 +5,10 @@
 // The tasks form the bisection tree of the decomposition: a leaf extracts and
 // reduces one domain, an inner node seams the pieces of its two children,
 // which are adjacent boxes. Tasks are handed out dynamically to whichever
-// worker is free, but which pieces are seamed together is fixed by the tree,
-// and every task's result depends only on its inputs, so the final surface is
-// bit-identical for any number of workers and any timing.
+// worker is free (or, for the last seams, run by the controlling rank), but
+// which pieces are seamed together is fixed by the tree, and every task's
+// result depends only on its inputs, so the final surface is bit-identical
+// for any number of workers and any timing.
 #pragma once
 
 #include <functional>
@@ -68,6 +69,7 @@ using Progress = std::function<void(int, int, double)>;
 class Job {
 public:
     explicit Job(const JobConfig& config);
+    virtual ~Job() = default;
 
     const JobConfig& config() const { return config_; }
     const Lattice& lattice() const { return *lattice_; }
@@ -79,8 +81,10 @@ public:
     std::string describe(int task) const;
 
     // Runs one task. A domain task takes no pieces; a seam task takes its two
-    // children's. Fills triangles_in / triangles_out of `record`.
-    Piece execute(int task, const Piece* left, const Piece* right, TaskRecord& record) const;
+    // children's. Fills triangles_in / triangles_out of `record`. Virtual so
+    // that a test can make a task fail that no input makes fail, such as the
+    // root seam, which runs on rank 0 (validation/mpi/test_mpi_failure.cpp).
+    virtual Piece execute(int task, const Piece* left, const Piece* right, TaskRecord& record) const;
 
 private:
     JobConfig config_;
@@ -98,6 +102,8 @@ class TaskQueue {
 public:
     explicit TaskQueue(const Job& job);
     bool has_ready() const { return !ready_.empty(); }
+    std::size_t ready_count() const { return ready_.size(); }
+    int peek() const { return ready_.begin()->second; } // what pop() would return
     int pop();
     // Marks `task` done; its parent becomes ready once both children are.
     void complete(int task);
@@ -117,9 +123,11 @@ JobResult run_local(const Job& job, const Progress& progress);
 // (and tetiso was built with MPI).
 bool launched_with_mpi();
 
-// Runs the job over MPI_COMM_WORLD: rank 0 controls, the others work. The
-// caller has initialised MPI. Returns the result on rank 0, nullopt on
-// workers. A task that throws ends the job on every rank: rank 0 throws
+// Runs the job over MPI_COMM_WORLD: rank 0 controls, and runs the seams that
+// no other task can run beside (the chain up to the root at the end); the
+// others work. The caller has initialised MPI. Returns the result on rank 0,
+// nullopt on workers; a task run by rank 0 is recorded with rank 0. A task
+// that throws, on any rank, ends the job on every rank: rank 0 throws
 // tetiso::Error naming the task and rank, workers throw JobStopped.
 std::optional<JobResult> run_mpi(const Job& job, const Progress& progress);
 
