@@ -271,7 +271,7 @@ struct Partial {
 // Distances from the samples of `source` to `target`, reduced over chunks
 // in chunk order.
 Partial one_way(const Piece& source, const std::vector<std::int32_t>& source_kept, const Bvh& target,
-                double spacing, int max_subdivisions) {
+                double spacing, int max_subdivisions, bool vertices_only) {
     std::vector<std::int32_t> vertices;
     {
         std::vector<std::uint8_t> referenced(source.x.size(), 0);
@@ -281,7 +281,7 @@ Partial one_way(const Piece& source, const std::vector<std::int32_t>& source_kep
             if (referenced[v]) vertices.push_back(static_cast<std::int32_t>(v));
     }
     const std::int64_t nv = static_cast<std::int64_t>(vertices.size());
-    const std::int64_t nt = static_cast<std::int64_t>(source_kept.size());
+    const std::int64_t nt = vertices_only ? 0 : static_cast<std::int64_t>(source_kept.size());
     const std::int64_t vertex_chunks = (nv + kVerticesPerChunk - 1) / kVerticesPerChunk;
     const std::int64_t chunks = vertex_chunks + (nt + kTrianglesPerChunk - 1) / kTrianglesPerChunk;
     std::vector<Partial> partial(static_cast<std::size_t>(chunks));
@@ -364,8 +364,8 @@ HausdorffReport hausdorff(const Piece& a, const Piece& b, const HausdorffOptions
 
     const Bvh bvh_a = build_bvh(a, kept_a);
     const Bvh bvh_b = build_bvh(b, kept_b);
-    const Partial fwd = one_way(a, kept_a, bvh_b, r.spacing, options.max_subdivisions);
-    const Partial bwd = one_way(b, kept_b, bvh_a, r.spacing, options.max_subdivisions);
+    const Partial fwd = one_way(a, kept_a, bvh_b, r.spacing, options.max_subdivisions, options.vertices_only);
+    const Partial bwd = one_way(b, kept_b, bvh_a, r.spacing, options.max_subdivisions, options.vertices_only);
 
     r.forward = fwd.max;
     r.backward = bwd.max;

@@ -125,8 +125,11 @@ TEST(Seam, MergeOrderDoesNotMatter) {
 
 TEST(Seam, ReductionAfterASeamStaysNearTheSeam) {
     // Two halves of a reduced gyroid: far from the cut the result keeps the
-    // halves' triangles exactly; near it the reduction runs.
-    const Lattice lattice(40);
+    // halves' triangles exactly; near it the reduction runs. The region grows
+    // with the cut's length and the halves with their area: at N = 60 the
+    // region is well under half of them (at N = 40 the halves, reduced to
+    // some 2,700 triangles each, are hardly wider than the region's rings).
+    const Lattice lattice(60);
     const Decomposition two(lattice, 2);
     const auto field = make_field("gyroid");
     ReduceOptions options;

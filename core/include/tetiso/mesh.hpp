@@ -64,10 +64,12 @@ struct Piece {
     std::vector<std::int32_t> triangles; // 3 vertex indices each; counter-clockwise
                                          // seen from the side of increasing field
     std::vector<int> domains;           // sorted ids of the domains this piece covers
-    // Per triangle, or empty for all zero: an upper estimate of the distance
-    // from the triangle to the raw isosurface it stands for. Reduction adds
-    // to it and keeps it under ReduceOptions::max_error, so a region reduced
-    // again after each seam still respects one bound for the whole job.
+    // Per triangle, or empty for all zero: the bound on the distance from the
+    // raw isosurface's vertices that this triangle's region stands for to the
+    // surface. A reduction starts each of its input vertices from the largest
+    // bound of its triangles and keeps the sum under ReduceOptions::max_error,
+    // so a region reduced again after each seam spends what is left of one
+    // budget for the whole job.
     std::vector<float> error;
 
     std::size_t vertex_count() const { return key.size(); }

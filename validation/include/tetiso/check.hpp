@@ -153,6 +153,10 @@ struct HausdorffOptions {
     // sampled about as densely as the fine one has vertices.
     double spacing = 0.0;
     int max_subdivisions = 64;
+    // Sample the referenced vertices only: forward is then exactly the
+    // largest distance of a's vertices to b, the quantity that
+    // ReduceOptions::max_error bounds (reduce(in) with a = in).
+    bool vertices_only = false;
 };
 
 struct HausdorffReport {
