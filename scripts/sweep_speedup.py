@@ -106,6 +106,14 @@ def run_once(args, domains, workers, scratch):
     return result
 
 
+def median_or_blank(values, digits):
+    return round(statistics.median(values), digits) if values else ""
+
+
+def max_or_blank(values, digits):
+    return round(max(values), digits) if values else ""
+
+
 def table(runs):
     """One row per (domains, workers), in series order (most domains first)."""
     groups = {}
@@ -122,11 +130,15 @@ def table(runs):
             "speedup": round(t1 / seconds, 3) if t1 else "",
             "efficiency": round(t1 / seconds / p, 3) if t1 else "",
             "total_seconds": round(statistics.median(r["seconds"]["total"] for r in reports), 3),
-            "wall_seconds": round(statistics.median(r["wall_seconds"] for r in reports), 3),
+            # A run made outside the sweep (a command cut near a lent machine's
+            # limit, say) may lack the wall time and the per-rank memory.
+            "wall_seconds": median_or_blank([r["wall_seconds"] for r in reports if "wall_seconds" in r], 3),
             "task_seconds": round(statistics.median(sum(t["end"] - t["start"] for t in r["tasks"])
                                                     for r in reports), 3),
-            "worker_peak_rss_mib": round(max(max(r["peak_rss_kib"][1:]) for r in reports) / 1024, 1),
-            "rank0_peak_rss_mib": round(max(r["peak_rss_kib"][0] for r in reports) / 1024, 1),
+            "worker_peak_rss_mib": max_or_blank([max(r["peak_rss_kib"][1:]) / 1024 for r in reports
+                                                 if r.get("peak_rss_kib")], 1),
+            "rank0_peak_rss_mib": max_or_blank([r["peak_rss_kib"][0] / 1024 for r in reports
+                                                if r.get("peak_rss_kib")], 1),
             "raw_triangles": reports[0]["raw_triangles"], "triangles": reports[0]["triangles"]})
     return rows
 

@@ -13,6 +13,7 @@ struct CheckArguments {
     std::filesystem::path input;
     std::filesystem::path against;
     bool self_intersections = true;
+    bool vertices_only = false;
 };
 
 void run_check(const CheckArguments& args) {
@@ -30,7 +31,7 @@ void run_check(const CheckArguments& args) {
             {"file", args.against.string()},
             {"same_signatures", same_signatures(topology, reference_topology)},
             {"reference_topology", to_json(reference_topology)},
-            {"hausdorff", to_json(hausdorff(surface, reference))},
+            {"hausdorff", to_json(hausdorff(surface, reference, HausdorffOptions{.vertices_only = args.vertices_only}))},
         };
     }
     std::cout << out.dump(2) << '\n';
@@ -45,6 +46,9 @@ void add_check_command(CLI::App& app, Command& run) {
     cmd->add_option("--against", args->against,
                     "Reference surface: adds the symmetric Hausdorff distance and whether the per-component "
                     "(genus, boundary loops) signatures match");
+    cmd->add_flag("--vertices-only", args->vertices_only,
+                  "With --against: measure at the vertices only (forward is then the largest distance of IN's "
+                  "vertices to REF, what reduce's --max-error bounds when IN is the input and REF the result)");
     cmd->add_flag("!--no-self-intersections", args->self_intersections,
                   "Skip the self-intersection count (CGAL builds only; slow on large surfaces)");
     cmd->callback([&run, args] { run = [args] { run_check(*args); }; });
