@@ -563,10 +563,10 @@ double point_triangle_distance(Vec p, Vec a, Vec b, Vec c) {
 //    a measured Hausdorff distance of 0.21 h against 0.43 h, both within
 //    0.5 h). Between input vertices the surfaces may part further: the
 //    sampled symmetric Hausdorff distance was 1.0-1.7x max_error at 0.25 h
-//    on the built-in fields, 2.4x at 0.1 h (results/reduce/bound_sweep.md). The new faces get the largest sample
-//    bound of the fan (plus, on the border, the old bounds and the border
-//    polyline's departure), the bound that the next call (a seam's
-//    reduction) starts from.
+//    on the built-in fields, 2.4x at 0.1 h (results/reduce/bound_sweep.md).
+//    The new faces get the largest sample bound of the fan (plus, on the
+//    border, the old bounds and the border polyline's departure), the bound
+//    that the next call (a seam's reduction) starts from.
 
 enum OpKind : u8 { kNone = 0, kCollapse = 1, kFlip = 2 };
 
@@ -912,6 +912,8 @@ public:
         const EdgeSlots r = slots(e);
         NewFan fan;
         fan.p = {ops.px[i], ops.py[i], ops.pz[i]};
+        // At most NewFan::kMax faces: legal_collapse refuses larger fans
+        // when there are samples.
         for (i32 j = 0; j < r.ku + r.kw; ++j) {
             const bool at_u = j < r.ku;
             const i32 js = at_u ? j : j - r.ku;
