@@ -854,24 +854,21 @@ private:
         // Old faces of both leaves: error bound, worst quality, mean normal.
         double err_old = 0.0, q_worst = 1.0;
         Vec nsum{0, 0, 0};
-        for (i32 j = 0; j < r.ku + r.kw; ++j) {
-            if (j >= r.ku && (j - r.ku == r.wf1 || j - r.ku == r.wf2)) continue; // seen from u
-            const i32 t = j < r.ku ? face(r.ou + j) : face(r.ow + j - r.ku);
+        for_each_leaf_face(r, [&](i32 slot, bool) {
+            const i32 t = face(slot);
             const FaceGeometry& g = geo(t);
             err_old = std::max(err_old, static_cast<double>(s_.err[static_cast<std::size_t>(t)]));
             q_worst = std::min(q_worst, static_cast<double>(g.q));
             if (g.valid()) nsum = nsum + g.n();
-        }
+        });
         const double q_floor = std::min(p_.q_min, q_worst);
         // New faces: (p, next, prev) for every other face of both leaves.
         NewFan fan;
         fan.p = p;
         int faces = 0;
-        for (i32 j = 0; j < r.ku + r.kw; ++j) {
-            const bool at_u = j < r.ku;
-            const i32 js = at_u ? j : j - r.ku;
-            if (at_u ? (js == r.uf1 || js == r.uf2) : (js == r.wf1 || js == r.wf2)) continue;
-            const i32 slot = (at_u ? r.ou : r.ow) + js;
+        bool spoiled = false;
+        for_each_leaf_face(r, [&](i32 slot, bool removed) {
+            if (removed || spoiled) return;
             const Vec a = s_.pos(fans_.next[static_cast<std::size_t>(slot)]);
             const Vec b = s_.pos(fans_.prev[static_cast<std::size_t>(slot)]);
             Vec n;
@@ -879,15 +876,16 @@ private:
             const FaceGeometry& g = geo(face(slot));
             // No face of non-zero area becomes degenerate (one that already
             // is may stay so: its own short edge will remove it).
-            if (q_new < q_floor || (!(q_new > 0) && g.q > 0)) return false;
-            if (q_new > 0 && (g.valid() ? dot(n, g.n()) < p_.cos_turn : dot(n, nsum) < 0)) return false;
+            spoiled = q_new < q_floor || (!(q_new > 0) && g.q > 0) ||
+                      (q_new > 0 && (g.valid() ? dot(n, g.n()) < p_.cos_turn : dot(n, nsum) < 0));
             if (faces < NewFan::kMax) {
                 fan.a[faces] = a;
                 fan.b[faces] = b;
                 fan.tri[faces] = face(slot);
             }
             ++faces;
-        }
+        });
+        if (spoiled) return false;
         if (!samples_) {
             ops.err[i] = static_cast<float>(err_old + increment);
             return true;
@@ -914,15 +912,12 @@ public:
         fan.p = {ops.px[i], ops.py[i], ops.pz[i]};
         // At most NewFan::kMax faces: legal_collapse refuses larger fans
         // when there are samples.
-        for (i32 j = 0; j < r.ku + r.kw; ++j) {
-            const bool at_u = j < r.ku;
-            const i32 js = at_u ? j : j - r.ku;
-            if (at_u ? (js == r.uf1 || js == r.uf2) : (js == r.wf1 || js == r.wf2)) continue;
-            const i32 slot = (at_u ? r.ou : r.ow) + js;
+        for_each_leaf_face(r, [&](i32 slot, bool removed) {
+            if (removed) return;
             fan.a[fan.n] = s_.pos(fans_.next[static_cast<std::size_t>(slot)]);
             fan.b[fan.n] = s_.pos(fans_.prev[static_cast<std::size_t>(slot)]);
             fan.tri[fan.n++] = face(slot);
-        }
+        });
         double worst = 0.0;
         place_samples(r, fan, worst, [&](i32 sample, i32 t, double) { owner[static_cast<std::size_t>(sample)] = t; });
     }
@@ -935,6 +930,17 @@ public:
     }
 
 private:
+    // Calls f(slot, removed) for every face of both leaves of a collapse,
+    // once each: u's fan, then w's without f1 and f2 (already seen from u).
+    // removed: the face is f1 or f2, which the collapse deletes; every other
+    // face becomes a new face in this order.
+    template <class F>
+    void for_each_leaf_face(const EdgeSlots& r, const F& f) const {
+        for (i32 j = 0; j < r.ku; ++j) f(r.ou + j, j == r.uf1 || j == r.uf2);
+        for (i32 j = 0; j < r.kw; ++j)
+            if (j != r.wf1 && j != r.wf2) f(r.ow + j, false);
+    }
+
     // The faces a collapse makes: (p, a[f], b[f]), which replace triangle
     // tri[f] (the same index: apply() rewrites triangles in place).
     struct NewFan {
@@ -953,14 +959,11 @@ private:
     template <class Visit>
     bool place_samples(const EdgeSlots& r, const NewFan& fan, double& worst, const Visit& visit) const {
         int replacement = 0;
-        for (i32 j = 0; j < r.ku + r.kw; ++j) {
-            const bool at_u = j < r.ku;
-            const i32 js = at_u ? j : j - r.ku;
-            const bool removed = at_u ? (js == r.uf1 || js == r.uf2) : (js == r.wf1 || js == r.wf2);
-            if (removed && !at_u) continue; // f1 and f2 were seen from u
-            const auto t = static_cast<std::size_t>(face((at_u ? r.ou : r.ow) + js));
+        bool placed = true;
+        for_each_leaf_face(r, [&](i32 slot, bool removed) {
+            const auto t = static_cast<std::size_t>(face(slot));
             const int own = removed ? -1 : replacement++;
-            for (i32 k = samples_->off[t]; k < samples_->off[t + 1]; ++k) {
+            for (i32 k = samples_->off[t]; k < samples_->off[t + 1] && placed; ++k) {
                 const i32 sample = samples_->list[static_cast<std::size_t>(k)];
                 const Vec q = samples_->pos(sample);
                 const double base = samples_->base[static_cast<std::size_t>(sample)];
@@ -979,13 +982,16 @@ private:
                             at = f;
                         }
                     }
-                    if (!(base + d <= p_.max_error)) return false;
+                    if (!(base + d <= p_.max_error)) {
+                        placed = false;
+                        return;
+                    }
                 }
                 worst = std::max(worst, base + d);
                 visit(sample, fan.tri[at], base + d);
             }
-        }
-        return true;
+        });
+        return placed;
     }
 
     // The same for a flip: f1 = (u, w, c), f2 = (w, u, d) become
