@@ -146,8 +146,11 @@ inline u64 mix64(u64 x) {
 // ---------------------------------------------------------------------------
 // The surface being reduced.
 
+// Positions are interleaved (xyz[3v..3v+2]): the tests read a vertex's three
+// coordinates together, from vertices scattered over the arrays, and one
+// cache line instead of three halves the time spent waiting on them.
 struct Surface {
-    std::vector<float> x, y, z;
+    std::vector<float> xyz;
     std::vector<EdgeKey> key;
     std::vector<u8> flags;
     std::vector<i32> tri;
@@ -158,8 +161,8 @@ struct Surface {
     i32 vertices() const { return static_cast<i32>(key.size()); }
     i32 triangles() const { return static_cast<i32>(tri.size() / 3); }
     Vec pos(i32 v) const {
-        const auto i = static_cast<std::size_t>(v);
-        return {x[i], y[i], z[i]};
+        const float* p = xyz.data() + 3 * static_cast<std::size_t>(v);
+        return {p[0], p[1], p[2]};
     }
     bool locked(i32 v) const { return (flags[static_cast<std::size_t>(v)] & kLocked) != 0; }
 };
@@ -174,28 +177,26 @@ struct Surface {
 // triangles): the only place where bounds add up is across calls, e.g. a
 // domain's reduction and then a seam's.
 struct Samples {
-    std::vector<float> x, y, z, base;
+    struct Point {
+        float x, y, z, base;
+    };
+    std::vector<Point> point; // one load brings a sample's position and bound
     std::vector<i32> owner;     // triangle, or -1 for a vertex of no triangle
     std::vector<i32> off, list; // samples of triangle t: list[off[t] .. off[t+1])
+    std::vector<i32> fill;      // sort()'s cursor per triangle
 
-    bool on() const { return !x.empty(); }
-    Vec pos(i32 i) const {
-        const auto k = static_cast<std::size_t>(i);
-        return {x[k], y[k], z[k]};
-    }
+    bool on() const { return !point.empty(); }
 
     void build(const Piece& in) {
         const std::size_t nv = in.vertex_count(), nt = in.triangle_count();
-        x = in.x;
-        y = in.y;
-        z = in.z;
-        base.assign(nv, 0.0f);
+        point.resize(nv);
+        for (std::size_t v = 0; v < nv; ++v) point[v] = {in.x[v], in.y[v], in.z[v], 0.0f};
         owner.assign(nv, -1);
         for (std::size_t t = nt; t-- > 0;)
             for (std::size_t r = 0; r < 3; ++r) {
                 const auto v = static_cast<std::size_t>(in.triangles[3 * t + r]);
                 owner[v] = static_cast<i32>(t); // the first triangle of v
-                if (!in.error.empty()) base[v] = std::max(base[v], in.error[t]);
+                if (!in.error.empty()) point[v].base = std::max(point[v].base, in.error[t]);
             }
     }
 
@@ -206,7 +207,7 @@ struct Samples {
             if (t >= 0) ++off[static_cast<std::size_t>(t) + 1];
         for (std::size_t t = 0; t < static_cast<std::size_t>(triangles); ++t) off[t + 1] += off[t];
         list.resize(static_cast<std::size_t>(off.back()));
-        std::vector<i32> fill(off.begin(), off.end() - 1);
+        fill.assign(off.begin(), off.end() - 1);
         for (std::size_t i = 0; i < owner.size(); ++i)
             if (owner[i] >= 0) list[static_cast<std::size_t>(fill[static_cast<std::size_t>(owner[i])]++)] = static_cast<i32>(i);
     }
@@ -229,6 +230,7 @@ struct Fans {
     // Neighbours of v at ring[off[v] + v + j], j < nn(v): next of each slot,
     // then, on the border, prev of the last slot.
     std::vector<i32> ring;
+    std::vector<u8> problem; // build_fans's per-vertex findings, kept for reuse
 
     i32 k(i32 v) const { return off[static_cast<std::size_t>(v) + 1] - off[static_cast<std::size_t>(v)]; }
     // Neighbours: k of them for an interior vertex, k + 1 on the border.
@@ -266,7 +268,8 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
     fans.border.assign(static_cast<std::size_t>(nv), 0);
 
     // Order each fan; record the first problem per vertex.
-    std::vector<u8> problem(static_cast<std::size_t>(nv), kFanOk);
+    std::vector<u8>& problem = fans.problem;
+    problem.assign(static_cast<std::size_t>(nv), kFanOk);
     std::vector<i32> problem_other(validate ? static_cast<std::size_t>(nv) : 0, -1);
     std::vector<i32> problem_count(validate ? static_cast<std::size_t>(nv) : 0, 0);
     parallel_for(threads, nv, [&](i64 vi) {
@@ -371,12 +374,13 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
 // ---------------------------------------------------------------------------
 // Step 2: edges. Edge e joins v0[e] < v1[e]; f1[e] is the triangle that runs
 // v0 → v1, f2[e] the one that runs v1 → v0 (-1 on the border, at most one of
-// them); v1 is neighbour s0[e] of v0 and v0 is neighbour s1[e] of v1.
+// them), and c[e], d[e] are their third corners (-1 with them); v1 is
+// neighbour s0[e] of v0 and v0 is neighbour s1[e] of v1.
 // slot[off[v] + v + j] is the edge to neighbour j of v; tedge[3t + r] is the
 // edge from corner r to corner r + 1 of triangle t.
 
 struct Edges {
-    std::vector<i32> v0, v1, f1, f2, s0, s1;
+    std::vector<i32> v0, v1, f1, f2, c, d, s0, s1;
     std::vector<i32> slot, tedge;
     std::vector<i32> opposite; // per fan slot: the edge of its triangle opposite v
     i32 count() const { return static_cast<i32>(v0.size()); }
@@ -396,7 +400,8 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
     auto& eoff = scratch_offset;
     exclusive_scan(count, eoff);
     const auto ne = static_cast<std::size_t>(eoff[static_cast<std::size_t>(nv)]);
-    for (auto* a : {&edges.v0, &edges.v1, &edges.f1, &edges.f2, &edges.s0, &edges.s1}) a->resize(ne);
+    for (auto* a : {&edges.v0, &edges.v1, &edges.f1, &edges.f2, &edges.c, &edges.d, &edges.s0, &edges.s1})
+        a->resize(ne);
     edges.slot.resize(fans.face.size() + static_cast<std::size_t>(nv));
     edges.tedge.resize(s.tri.size());
     parallel_for(threads, nv, [&](i64 vi) {
@@ -409,9 +414,12 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
             if (u < v) continue;
             edges.v0[e] = v;
             edges.v1[e] = u;
+            // f1 = (v, u, c) sits in slot j, f2 = (u, v, d) in the slot before.
+            const i32 before = j > 0 ? o + j - 1 : (border ? -1 : o + k - 1);
             edges.f1[e] = j < k ? fans.face[static_cast<std::size_t>(o + j)] : -1;
-            edges.f2[e] = j > 0 ? fans.face[static_cast<std::size_t>(o + j - 1)]
-                                : (border ? -1 : fans.face[static_cast<std::size_t>(o + k - 1)]);
+            edges.c[e] = j < k ? fans.prev[static_cast<std::size_t>(o + j)] : -1;
+            edges.f2[e] = before >= 0 ? fans.face[static_cast<std::size_t>(before)] : -1;
+            edges.d[e] = before >= 0 ? fans.next[static_cast<std::size_t>(before)] : -1;
             edges.s0[e] = j;
             edges.slot[static_cast<std::size_t>(o + v + j)] = static_cast<i32>(e);
             ++e;
@@ -639,9 +647,8 @@ public:
         r.uf2 = j > 0 ? j - 1 : (border(r.u) ? -1 : r.ku - 1);
         r.wf2 = m < r.kw ? m : -1;
         r.wf1 = m > 0 ? m - 1 : (border(r.w) ? -1 : r.kw - 1);
-        // f1 = (u, w, c): in u's slot the corner before u is c; f2 = (w, u, d).
-        r.c = r.uf1 >= 0 ? fans_.prev[static_cast<std::size_t>(r.ou + r.uf1)] : -1;
-        r.d = r.uf2 >= 0 ? fans_.next[static_cast<std::size_t>(r.ou + r.uf2)] : -1;
+        r.c = edges_.c[i];
+        r.d = edges_.d[i];
         return r;
     }
 
@@ -655,10 +662,12 @@ public:
         if (p_.flips && r.f1 >= 0 && r.f2 >= 0) propose_flip(r, hash, ops, i);
     }
 
-    bool legal(i32 e, Ops& ops) const {
+    // owner: where to move the samples of a legal collapse (its caller
+    // chooses every operation this finds legal); null to only test.
+    bool legal(i32 e, Ops& ops, std::vector<i32>* owner) const {
         const auto i = static_cast<std::size_t>(e);
         if (ops.kind[i] == kFlip) return true; // fully tested in propose_flip
-        return legal_collapse(slots(e), ops, i);
+        return legal_collapse(slots(e), ops, i, owner);
     }
 
 private:
@@ -808,7 +817,7 @@ private:
         return false;
     }
 
-    bool legal_collapse(const EdgeSlots& r, Ops& ops, std::size_t i) const {
+    bool legal_collapse(const EdgeSlots& r, Ops& ops, std::size_t i, std::vector<i32>* owner) const {
         const i32 u = r.u, w = r.w, c = r.c, d = r.d;
         const bool border_edge = r.f1 < 0 || r.f2 < 0;
         // Link condition.
@@ -895,7 +904,16 @@ private:
         // On the border the polyline's 1D departure adds to the bounds it
         // replaces (the samples see only the 2D one).
         double worst = border_edge ? err_old + increment : 0.0;
-        if (worst > p_.max_error || !place_samples(r, fan, worst, [](i32, i32, double) {})) return false;
+        if (worst > p_.max_error) return false;
+        // The placements wait until every sample has found a face: a test
+        // that fails half way must leave the owners as they were.
+        thread_local std::vector<std::pair<i32, i32>> placed;
+        placed.clear();
+        if (!place_samples(r, fan, worst, [&](i32 sample, i32 t, double) {
+                if (owner) placed.emplace_back(sample, t);
+            }))
+            return false;
+        for (const auto& [sample, t] : placed) (*owner)[static_cast<std::size_t>(sample)] = t;
         ops.err[i] = static_cast<float>(worst);
         return true;
     }
@@ -965,8 +983,9 @@ private:
             const int own = removed ? -1 : replacement++;
             for (i32 k = samples_->off[t]; k < samples_->off[t + 1] && placed; ++k) {
                 const i32 sample = samples_->list[static_cast<std::size_t>(k)];
-                const Vec q = samples_->pos(sample);
-                const double base = samples_->base[static_cast<std::size_t>(sample)];
+                const Samples::Point& sp = samples_->point[static_cast<std::size_t>(sample)];
+                const Vec q{sp.x, sp.y, sp.z};
+                const double base = sp.base;
                 int at = -1;
                 double d = 0.0;
                 if (own >= 0) {
@@ -1003,9 +1022,10 @@ private:
         for (const i32 t : {r.f1, r.f2})
             for (i32 k = samples_->off[static_cast<std::size_t>(t)]; k < samples_->off[static_cast<std::size_t>(t) + 1]; ++k) {
                 const i32 sample = samples_->list[static_cast<std::size_t>(k)];
-                const Vec q = samples_->pos(sample);
+                const Samples::Point& sp = samples_->point[static_cast<std::size_t>(sample)];
+                const Vec q{sp.x, sp.y, sp.z};
                 const double d1 = point_triangle_distance(q, pc, pu, pd), d2 = point_triangle_distance(q, pd, pw, pc);
-                const double bound = samples_->base[static_cast<std::size_t>(sample)] + std::min(d1, d2);
+                const double bound = sp.base + std::min(d1, d2);
                 if (!(bound <= p_.max_error)) return false;
                 worst = std::max(worst, bound);
                 visit(sample, d1 <= d2 ? r.f1 : r.f2, bound);
@@ -1088,10 +1108,24 @@ private:
 // chosen set does not depend on it.
 constexpr int kLazyPasses = 4;
 
+// chosen[e]: kChosenTested when the operation passed its legality test at the
+// moment it was picked, so the test's sample placements are already stored
+// (the test runs once instead of again before apply).
+constexpr u8 kChosen = 1, kChosenTested = 2;
+
+// The selection's working arrays, kept from round to round so that no round
+// pays for fresh pages (measured: 5-8 % of a reduction went to page faults).
+struct SelectScratch {
+    std::vector<i32> best, ring, active_list, touched, next;
+    std::vector<u8> mark, active, picked;
+    std::vector<i32> claimed; // == the pass's stamp: within path length 1 of a chosen operation
+};
+
 class Selector {
 public:
-    Selector(const Surface& s, const Fans& fans, const Edges& edges, const Ops& ops)
-        : s_(s), fans_(fans), edges_(edges), ops_(ops) {}
+    Selector(const Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, SelectScratch& scratch)
+        : s_(s), fans_(fans), edges_(edges), ops_(ops), best_(scratch.best), ring_(scratch.ring),
+          claimed_(scratch.claimed), mark_(scratch.mark), active_(scratch.active), scratch_(scratch) {}
 
     // True when operation a ranks above operation b (b may be -1).
     bool beats(i32 a, i32 b) const {
@@ -1110,32 +1144,37 @@ public:
         out[0] = edges_.v0[i];
         out[1] = edges_.v1[i];
         if (ops_.kind[i] != kFlip) return 2;
-        out[2] = third(edges_.f1[i], out[0], out[1]);
-        out[3] = third(edges_.f2[i], out[0], out[1]);
+        out[2] = edges_.c[i];
+        out[3] = edges_.d[i];
         return 4;
     }
 
     // candidates: the edges with an operation, ascending. Sets chosen[e] for
-    // the operations chosen, refused[e] for those found illegal.
+    // the operations chosen (kChosen or kChosenTested), refused[e] for those
+    // found illegal. legal(e, commit): commit is true when e is chosen if legal.
     template <class Legal>
-    void select(int threads, int max_passes, bool any_flip, std::vector<i32> candidates, std::vector<u8>& chosen,
-                std::vector<u8>& refused, const Legal& legal) const {
+    void select(int threads, int max_passes, const std::vector<i32>& candidates,
+                std::vector<u8>& chosen, std::vector<u8>& refused, const Legal& legal) const {
         const i32 nv = s_.vertices(), ne = edges_.count();
         best_.assign(static_cast<std::size_t>(nv), -1);
         ring_.resize(static_cast<std::size_t>(nv));
-        end_.assign(static_cast<std::size_t>(nv), 0);
+        claimed_.assign(static_cast<std::size_t>(nv), 0);
+        stamp_ = 0;
         mark_.assign(static_cast<std::size_t>(nv), 0);
         active_.assign(static_cast<std::size_t>(ne), 0);
         for (const i32 e : candidates) active_[static_cast<std::size_t>(e)] = 1;
-        std::vector<i32>& A = candidates;
-        std::vector<i32> T, next;
-        std::vector<u8> picked(A.size());
+        std::vector<i32>& A = scratch_.active_list;
+        A.assign(candidates.begin(), candidates.end());
+        std::vector<i32>& T = scratch_.touched;
+        std::vector<i32>& next = scratch_.next;
+        std::vector<u8>& picked = scratch_.picked;
+        T.clear();
         for (int pass = 0; pass < max_passes && !A.empty(); ++pass) {
             if (pass == kLazyPasses) {
                 // What the first passes left: test it all at once.
                 parallel_for(threads, static_cast<i64>(A.size()), [&](i64 ai) {
                     const i32 e = A[static_cast<std::size_t>(ai)];
-                    if (!legal(e)) refused[static_cast<std::size_t>(e)] = 1;
+                    if (!legal(e, false)) refused[static_cast<std::size_t>(e)] = 1;
                 });
                 next.clear();
                 for (const i32 e : A)
@@ -1144,38 +1183,47 @@ public:
                 A.swap(next);
                 if (A.empty()) break;
             }
-            // T: the vertices touched by active operations (best[] is -1
-            // everywhere else).
+            // best[v]: the best active operation touching v, a max under a
+            // total order, so scattering from the operations gives the same
+            // value in any order (a compare-and-swap loop when threaded).
+            // T: the vertices touched (best[] is -1 everywhere else).
             for (const i32 v : T) best_[static_cast<std::size_t>(v)] = -1;
             T.clear();
-            for (const i32 e : A) {
-                i32 vs[4];
-                const int n = touched(e, vs);
-                for (int i = 0; i < n; ++i)
-                    if (!mark_[static_cast<std::size_t>(vs[i])]) {
-                        mark_[static_cast<std::size_t>(vs[i])] = 1;
-                        T.push_back(vs[i]);
+            const i64 na = static_cast<i64>(A.size());
+            if (threads > 1 && na > kParallelMin) {
+                parallel_for(threads, na, [&](i64 ai) {
+                    const i32 e = A[static_cast<std::size_t>(ai)];
+                    i32 vs[4];
+                    const int n = touched(e, vs);
+                    for (int i = 0; i < n; ++i) {
+                        std::atomic_ref<i32> best(best_[static_cast<std::size_t>(vs[i])]);
+                        i32 current = best.load(std::memory_order_relaxed);
+                        while (beats(e, current) && !best.compare_exchange_weak(current, e, std::memory_order_relaxed)) {
+                        }
                     }
+                });
+                for (const i32 e : A) {
+                    i32 vs[4];
+                    const int n = touched(e, vs);
+                    for (int i = 0; i < n; ++i)
+                        if (!mark_[static_cast<std::size_t>(vs[i])]) {
+                            mark_[static_cast<std::size_t>(vs[i])] = 1;
+                            T.push_back(vs[i]);
+                        }
+                }
+                for (const i32 v : T) mark_[static_cast<std::size_t>(v)] = 0;
+            } else {
+                for (const i32 e : A) {
+                    i32 vs[4];
+                    const int n = touched(e, vs);
+                    for (int i = 0; i < n; ++i) {
+                        i32& best = best_[static_cast<std::size_t>(vs[i])];
+                        if (best < 0) T.push_back(vs[i]);
+                        if (beats(e, best)) best = e;
+                    }
+                }
             }
-            for (const i32 v : T) mark_[static_cast<std::size_t>(v)] = 0;
             const i64 nt = static_cast<i64>(T.size());
-            parallel_for(threads, nt, [&](i64 ti) {
-                const i32 v = T[static_cast<std::size_t>(ti)];
-                const i32 o = fans_.off[static_cast<std::size_t>(v)], k = fans_.k(v), n = fans_.nn(v);
-                i32 b = -1;
-                for (i32 j = 0; j < n; ++j) {
-                    const i32 e = edges_.slot[static_cast<std::size_t>(o + v + j)];
-                    if (active_[static_cast<std::size_t>(e)] && beats(e, b)) b = e;
-                }
-                // Flips of the edges opposite v touch v too.
-                for (i32 j = 0; j < k && any_flip; ++j) {
-                    const i32 e = edges_.opposite[static_cast<std::size_t>(o + j)];
-                    if (active_[static_cast<std::size_t>(e)] && ops_.kind[static_cast<std::size_t>(e)] == kFlip &&
-                        beats(e, b))
-                        b = e;
-                }
-                best_[static_cast<std::size_t>(v)] = b;
-            });
             parallel_for(threads, nt, [&](i64 ti) {
                 const i32 v = T[static_cast<std::size_t>(ti)];
                 i32 b = best_[static_cast<std::size_t>(v)];
@@ -1189,7 +1237,6 @@ public:
             // the first passes it runs its legality tests now.
             picked.assign(A.size(), 0);
             const bool lazy = pass < kLazyPasses;
-            const i64 na = static_cast<i64>(A.size());
 #ifdef _OPENMP
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 512) if (threads > 1 && na > kParallelMin)
 #endif
@@ -1201,19 +1248,27 @@ public:
                 for (int i = 0; i < n && win; ++i) win = ring_[static_cast<std::size_t>(vs[i])] == e;
                 if (!win) continue;
                 picked[static_cast<std::size_t>(ai)] = 1;
-                if (lazy && !legal(e)) {
+                if (lazy && !legal(e, true)) {
                     refused[static_cast<std::size_t>(e)] = 1;
                     continue;
                 }
-                chosen[static_cast<std::size_t>(e)] = 1;
-                for (int i = 0; i < n; ++i) end_[static_cast<std::size_t>(vs[i])] = 1;
+                chosen[static_cast<std::size_t>(e)] = lazy ? kChosenTested : kChosen;
             }
-            // Claimed: within path length 1 of a chosen operation.
-            parallel_for(threads, nt, [&](i64 ti) {
-                const i32 v = T[static_cast<std::size_t>(ti)];
-                u8 c = end_[static_cast<std::size_t>(v)];
-                for (i32 j = 0, n = fans_.nn(v); j < n && !c; ++j) c = end_[static_cast<std::size_t>(fans_.nbr(v, j))];
-                ring_[static_cast<std::size_t>(v)] = c ? -2 : -1; // reused as the claimed flag
+            // Claimed: within path length 1 of a chosen operation. The chosen
+            // are few (about one in twenty in a round's first pass), so they
+            // stamp their closed neighbourhoods rather than every touched
+            // vertex looking around itself.
+            ++stamp_;
+            parallel_for(threads, na, [&](i64 ai) {
+                if (!picked[static_cast<std::size_t>(ai)]) return;
+                const i32 e = A[static_cast<std::size_t>(ai)];
+                if (!chosen[static_cast<std::size_t>(e)]) return;
+                i32 vs[4];
+                const int n = touched(e, vs);
+                for (int i = 0; i < n; ++i) {
+                    claim(vs[i]);
+                    for (i32 j = 0, m = fans_.nn(vs[i]); j < m; ++j) claim(fans_.nbr(vs[i], j));
+                }
             });
             next.clear();
             for (std::size_t ai = 0; ai < A.size(); ++ai) {
@@ -1222,36 +1277,28 @@ public:
                 if (keep) {
                     i32 vs[4];
                     const int n = touched(e, vs);
-                    for (int i = 0; i < n && keep; ++i) keep = ring_[static_cast<std::size_t>(vs[i])] != -2;
+                    for (int i = 0; i < n && keep; ++i) keep = claimed_[static_cast<std::size_t>(vs[i])] != stamp_;
                 }
                 if (keep) next.push_back(e);
                 else active_[static_cast<std::size_t>(e)] = 0;
             }
-            for (std::size_t ai = 0; ai < A.size(); ++ai)
-                if (picked[ai] && chosen[static_cast<std::size_t>(A[ai])]) {
-                    i32 vs[4];
-                    const int n = touched(A[ai], vs);
-                    for (int i = 0; i < n; ++i) end_[static_cast<std::size_t>(vs[i])] = 0;
-                }
             A.swap(next);
         }
     }
 
 private:
-    i32 third(i32 t, i32 a, i32 b) const {
-        for (int r = 0; r < 3; ++r) {
-            const i32 v = s_.tri[static_cast<std::size_t>(3 * t + r)];
-            if (v != a && v != b) return v;
-        }
-        return -1;
-    }
-
     const Surface& s_;
     const Fans& fans_;
     const Edges& edges_;
     const Ops& ops_;
-    mutable std::vector<i32> best_, ring_;
-    mutable std::vector<u8> end_, mark_, active_;
+    void claim(i32 v) const {
+        std::atomic_ref<i32>(claimed_[static_cast<std::size_t>(v)]).store(stamp_, std::memory_order_relaxed);
+    }
+
+    std::vector<i32>&best_, &ring_, &claimed_;
+    std::vector<u8>&mark_, &active_;
+    SelectScratch& scratch_;
+    mutable i32 stamp_ = 0;
 };
 
 // ---------------------------------------------------------------------------
@@ -1327,13 +1374,7 @@ void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, con
         const i32 u = edges.v0[e], w = edges.v1[e], f1 = edges.f1[e], f2 = edges.f2[e];
         const float err = ops.err[e];
         if (ops.kind[e] == kFlip) {
-            i32 c = -1, d = -1;
-            for (int r = 0; r < 3; ++r) {
-                const i32 a = s.tri[static_cast<std::size_t>(3 * f1 + r)];
-                const i32 b = s.tri[static_cast<std::size_t>(3 * f2 + r)];
-                if (a != u && a != w) c = a;
-                if (b != u && b != w) d = b;
-            }
+            const i32 c = edges.c[e], d = edges.d[e];
             for (const i32 v : {u, w, c, d}) mark(v);
             // f1 = (u, w, c), f2 = (w, u, d) → (c, u, d), (d, w, c).
             const i32 g1[3] = {c, u, d}, g2[3] = {d, w, c};
@@ -1347,9 +1388,10 @@ void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, con
         }
         const i32 keep = ops.survivor[e], gone = keep == u ? w : u;
         if (!s.locked(keep)) { // a locked survivor is pinned: p is its own position
-            s.x[static_cast<std::size_t>(keep)] = ops.px[e];
-            s.y[static_cast<std::size_t>(keep)] = ops.py[e];
-            s.z[static_cast<std::size_t>(keep)] = ops.pz[e];
+            float* p = s.xyz.data() + 3 * static_cast<std::size_t>(keep);
+            p[0] = ops.px[e];
+            p[1] = ops.py[e];
+            p[2] = ops.pz[e];
         }
         vertex_alive[static_cast<std::size_t>(gone)] = 0;
         for (const i32 v : {keep, gone}) {
@@ -1399,7 +1441,7 @@ bool unchanged(const Surface& s, const Edges& edges, const std::vector<u8>& chan
 // triangle_refs: triangle indices to renumber (the samples' owners).
 void compact(Surface& s, const std::vector<u8>& vertex_alive, const std::vector<u8>& triangle_alive, int threads,
              std::initializer_list<std::vector<u8>*> vertex_marks, std::vector<i32>& triangle_refs,
-             std::vector<i32>& remap, std::vector<i32>& scratch) {
+             std::vector<i32>& remap, std::vector<i32>& scratch, Surface& spare) {
     const i32 nv = s.vertices(), nt = s.triangles();
     remap.resize(static_cast<std::size_t>(nv));
     i32 next = 0;
@@ -1409,14 +1451,12 @@ void compact(Surface& s, const std::vector<u8>& vertex_alive, const std::vector<
         const i32 r = remap[static_cast<std::size_t>(v)];
         if (r < 0 || r == v) continue;
         const auto a = static_cast<std::size_t>(r), b = static_cast<std::size_t>(v);
-        s.x[a] = s.x[b];
-        s.y[a] = s.y[b];
-        s.z[a] = s.z[b];
+        for (std::size_t c = 0; c < 3; ++c) s.xyz[3 * a + c] = s.xyz[3 * b + c];
         s.key[a] = s.key[b];
         s.flags[a] = s.flags[b];
         for (auto* m : vertex_marks) (*m)[a] = (*m)[b];
     }
-    for (auto* a : {&s.x, &s.y, &s.z}) a->resize(static_cast<std::size_t>(next));
+    s.xyz.resize(3 * static_cast<std::size_t>(next));
     s.key.resize(static_cast<std::size_t>(next));
     s.flags.resize(static_cast<std::size_t>(next));
     for (auto* m : vertex_marks) m->resize(static_cast<std::size_t>(next));
@@ -1424,8 +1464,10 @@ void compact(Surface& s, const std::vector<u8>& vertex_alive, const std::vector<
     tpos.resize(static_cast<std::size_t>(nt));
     i32 tn = 0;
     for (i32 t = 0; t < nt; ++t) tpos[static_cast<std::size_t>(t)] = triangle_alive[static_cast<std::size_t>(t)] ? tn++ : -1;
-    std::vector<i32> tri(static_cast<std::size_t>(3 * tn));
-    std::vector<float> err(static_cast<std::size_t>(tn));
+    std::vector<i32>& tri = spare.tri;
+    std::vector<float>& err = spare.err;
+    tri.resize(static_cast<std::size_t>(3 * tn));
+    err.resize(static_cast<std::size_t>(tn));
     parallel_for(threads, nt, [&](i64 ti) {
         const auto t = static_cast<std::size_t>(ti);
         const i32 to = tpos[t];
@@ -1455,7 +1497,13 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
                         options.short_edge_ratio,
                         options.flips};
 
-    Surface s{in.x, in.y, in.z, in.key,
+    std::vector<float> xyz(3 * in.vertex_count());
+    for (std::size_t v = 0; v < in.vertex_count(); ++v) {
+        xyz[3 * v] = in.x[v];
+        xyz[3 * v + 1] = in.y[v];
+        xyz[3 * v + 2] = in.z[v];
+    }
+    Surface s{std::move(xyz), in.key,
               in.flags.empty() ? std::vector<u8>(in.key.size(), 0) : in.flags, in.triangles,
               in.error.empty() ? std::vector<float>(in.triangle_count(), 0.0f) : in.error};
     ReduceReport local_report;
@@ -1469,9 +1517,11 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     std::vector<FaceGeometry> geometry;
     Ops ops;
     std::vector<i32> scratch_a, scratch_b, remap;
+    Surface spare; // compact()'s second triangle and error arrays
     std::vector<u8> chosen, refused, vertex_alive, triangle_alive;
     std::vector<u8> quiet(in.vertex_count(), 0), changed(in.vertex_count(), 0);
     std::vector<i32> candidate_list;
+    SelectScratch select_scratch;
     int idle_rounds = 0;
     Samples samples;
     if (options.max_error > 0) samples.build(in);
@@ -1506,12 +1556,8 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         chosen.assign(static_cast<std::size_t>(ne), 0);
         refused.assign(static_cast<std::size_t>(ne), 0);
         candidate_list.clear();
-        bool any_flip = false;
-        for (i32 e = 0; e < ne; ++e) {
-            const u8 kind = ops.kind[static_cast<std::size_t>(e)];
-            if (kind != kNone) candidate_list.push_back(e);
-            any_flip |= kind == kFlip;
-        }
+        for (i32 e = 0; e < ne; ++e)
+            if (ops.kind[static_cast<std::size_t>(e)] != kNone) candidate_list.push_back(e);
         const std::size_t candidates = candidate_list.size();
         st.propose += since(t0);
         ReduceRound stats;
@@ -1522,9 +1568,11 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
             break;
         }
         t0 = now();
-        const Selector selector(s, fans, edges, ops);
-        selector.select(threads, options.selection_passes, any_flip, candidate_list, chosen, refused,
-                        [&](i32 e) { return evaluator.legal(e, ops); });
+        const Selector selector(s, fans, edges, ops, select_scratch);
+        selector.select(threads, options.selection_passes, candidate_list, chosen, refused,
+                        [&](i32 e, bool commit) {
+                            return evaluator.legal(e, ops, commit && samples.on() ? &samples.owner : nullptr);
+                        });
         // Quiet: no operation on the vertex's edges that is not known illegal.
         std::fill(quiet.begin(), quiet.end(), u8{1});
         for (const i32 e : candidate_list)
@@ -1542,6 +1590,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
             parallel_for(threads, ne, [&](i64 ei) {
                 const auto e = static_cast<std::size_t>(ei);
                 if (!chosen[e]) return;
+                if (ops.kind[e] == kCollapse && chosen[e] == kChosenTested) return; // moved when tested
                 if (ops.kind[e] == kFlip) evaluator.move_flip_samples(static_cast<i32>(e), samples.owner);
                 else evaluator.move_collapse_samples(static_cast<i32>(e), ops, samples.owner);
             });
@@ -1549,15 +1598,21 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         st.apply += since(t0);
         t0 = now();
         rep.rounds.push_back(stats);
-        if (stats.collapses > 0) compact(s, vertex_alive, triangle_alive, threads, {&quiet, &changed}, samples.owner, remap, scratch_a);
+        if (stats.collapses > 0) compact(s, vertex_alive, triangle_alive, threads, {&quiet, &changed}, samples.owner, remap, scratch_a, spare);
         st.compact += since(t0);
         idle_rounds = stats.collapses == 0 ? idle_rounds + 1 : 0;
         if (idle_rounds >= 2) break;
     }
     Piece out;
-    out.x = std::move(s.x);
-    out.y = std::move(s.y);
-    out.z = std::move(s.z);
+    const std::size_t nv_out = s.key.size();
+    out.x.resize(nv_out);
+    out.y.resize(nv_out);
+    out.z.resize(nv_out);
+    for (std::size_t v = 0; v < nv_out; ++v) {
+        out.x[v] = s.xyz[3 * v];
+        out.y[v] = s.xyz[3 * v + 1];
+        out.z[v] = s.xyz[3 * v + 2];
+    }
     out.key = std::move(s.key);
     out.flags = std::move(s.flags);
     out.triangles = std::move(s.tri);
