@@ -180,37 +180,60 @@ struct Samples {
     struct Point {
         float x, y, z, base;
     };
-    std::vector<Point> point; // one load brings a sample's position and bound
-    std::vector<i32> owner;     // triangle, or -1 for a vertex of no triangle
-    std::vector<i32> off, list; // samples of triangle t: list[off[t] .. off[t+1])
-    std::vector<i32> fill;      // sort()'s cursor per triangle
+    // Kept in the order of their owners, so the samples of triangle t are
+    // point[off[t] .. off[t+1]) and a test reads them as one run rather than
+    // one cache miss each (measured: 4 % of a reduction went to that wait).
+    // sort() restores the order at the start of every round; an operation
+    // changes only owner[], which the positions stay in step with.
+    std::vector<Point> point;
+    std::vector<i32> owner; // triangle, per point
+    std::vector<i32> off;
+    bool enabled = false;
 
-    bool on() const { return !point.empty(); }
+    bool on() const { return enabled; }
 
+    // A vertex of no triangle is no sample: no operation can move it.
     void build(const Piece& in) {
         const std::size_t nv = in.vertex_count(), nt = in.triangle_count();
-        point.resize(nv);
-        for (std::size_t v = 0; v < nv; ++v) point[v] = {in.x[v], in.y[v], in.z[v], 0.0f};
-        owner.assign(nv, -1);
+        std::vector<i32> first(nv, -1);
+        std::vector<float> base(nv, 0.0f);
         for (std::size_t t = nt; t-- > 0;)
             for (std::size_t r = 0; r < 3; ++r) {
                 const auto v = static_cast<std::size_t>(in.triangles[3 * t + r]);
-                owner[v] = static_cast<i32>(t); // the first triangle of v
-                if (!in.error.empty()) point[v].base = std::max(point[v].base, in.error[t]);
+                first[v] = static_cast<i32>(t);
+                if (!in.error.empty()) base[v] = std::max(base[v], in.error[t]);
             }
+        point.clear();
+        owner.clear();
+        for (std::size_t v = 0; v < nv; ++v)
+            if (first[v] >= 0) {
+                point.push_back({in.x[v], in.y[v], in.z[v], base[v]});
+                owner.push_back(first[v]);
+            }
+        enabled = true;
     }
 
-    // Counting sort of the samples by owner (sample order within a triangle).
+    // Stable counting sort by owner.
     void sort(i32 triangles) {
         off.assign(static_cast<std::size_t>(triangles) + 1, 0);
-        for (const i32 t : owner)
-            if (t >= 0) ++off[static_cast<std::size_t>(t) + 1];
+        for (const i32 t : owner) ++off[static_cast<std::size_t>(t) + 1];
         for (std::size_t t = 0; t < static_cast<std::size_t>(triangles); ++t) off[t + 1] += off[t];
-        list.resize(static_cast<std::size_t>(off.back()));
-        fill.assign(off.begin(), off.end() - 1);
-        for (std::size_t i = 0; i < owner.size(); ++i)
-            if (owner[i] >= 0) list[static_cast<std::size_t>(fill[static_cast<std::size_t>(owner[i])]++)] = static_cast<i32>(i);
+        fill_.assign(off.begin(), off.end() - 1);
+        sorted_point_.resize(point.size());
+        sorted_owner_.resize(owner.size());
+        for (std::size_t i = 0; i < owner.size(); ++i) {
+            const auto at = static_cast<std::size_t>(fill_[static_cast<std::size_t>(owner[i])]++);
+            sorted_point_[at] = point[i];
+            sorted_owner_[at] = owner[i];
+        }
+        point.swap(sorted_point_);
+        owner.swap(sorted_owner_);
     }
+
+private:
+    std::vector<i32> fill_;
+    std::vector<Point> sorted_point_;
+    std::vector<i32> sorted_owner_;
 };
 
 std::string key_text(const Surface& s, i32 v) { return std::to_string(s.key[static_cast<std::size_t>(v)]); }
@@ -981,8 +1004,7 @@ private:
         for_each_leaf_face(r, [&](i32 slot, bool removed) {
             const auto t = static_cast<std::size_t>(face(slot));
             const int own = removed ? -1 : replacement++;
-            for (i32 k = samples_->off[t]; k < samples_->off[t + 1] && placed; ++k) {
-                const i32 sample = samples_->list[static_cast<std::size_t>(k)];
+            for (i32 sample = samples_->off[t]; sample < samples_->off[t + 1] && placed; ++sample) {
                 const Samples::Point& sp = samples_->point[static_cast<std::size_t>(sample)];
                 const Vec q{sp.x, sp.y, sp.z};
                 const double base = sp.base;
@@ -1020,8 +1042,8 @@ private:
     bool place_flip_samples(const EdgeSlots& r, double& worst, const Visit& visit) const {
         const Vec pu = s_.pos(r.u), pw = s_.pos(r.w), pc = s_.pos(r.c), pd = s_.pos(r.d);
         for (const i32 t : {r.f1, r.f2})
-            for (i32 k = samples_->off[static_cast<std::size_t>(t)]; k < samples_->off[static_cast<std::size_t>(t) + 1]; ++k) {
-                const i32 sample = samples_->list[static_cast<std::size_t>(k)];
+            for (i32 sample = samples_->off[static_cast<std::size_t>(t)];
+                 sample < samples_->off[static_cast<std::size_t>(t) + 1]; ++sample) {
                 const Samples::Point& sp = samples_->point[static_cast<std::size_t>(sample)];
                 const Vec q{sp.x, sp.y, sp.z};
                 const double d1 = point_triangle_distance(q, pc, pu, pd), d2 = point_triangle_distance(q, pd, pw, pc);
