@@ -406,6 +406,7 @@ struct Edges {
     std::vector<i32> v0, v1, f1, f2, c, d, s0, s1;
     std::vector<i32> slot, tedge;
     std::vector<i32> opposite; // per fan slot: the edge of its triangle opposite v
+    std::vector<i32> corner_slot; // build_edges's map from triangle corner 3t + r to fan slot
     i32 count() const { return static_cast<i32>(v0.size()); }
 };
 
@@ -427,6 +428,13 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
         a->resize(ne);
     edges.slot.resize(fans.face.size() + static_cast<std::size_t>(nv));
     edges.tedge.resize(s.tri.size());
+    // corner_slot[3t + r]: the fan slot of corner r of triangle t.
+    std::vector<i32>& corner_slot = edges.corner_slot;
+    corner_slot.resize(s.tri.size());
+    parallel_for(threads, static_cast<i64>(fans.face.size()), [&](i64 j) {
+        const auto slot = static_cast<std::size_t>(j);
+        corner_slot[3 * static_cast<std::size_t>(fans.face[slot]) + fans.corner[slot]] = static_cast<i32>(j);
+    });
     parallel_for(threads, nv, [&](i64 vi) {
         const i32 v = static_cast<i32>(vi);
         const i32 o = fans.off[static_cast<std::size_t>(v)], k = fans.k(v), n = fans.nn(v);
@@ -451,17 +459,24 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
     parallel_for(threads, nv, [&](i64 vi) {
         const i32 v = static_cast<i32>(vi);
         const i32 o = fans.off[static_cast<std::size_t>(v)], n = fans.nn(v);
+        const i32 k = fans.k(v);
         for (i32 j = 0; j < n; ++j) {
             const i32 u = fans.nbr(v, j);
             if (u > v) continue;
-            const i32 ou = fans.off[static_cast<std::size_t>(u)];
-            for (i32 i = 0, m = fans.nn(u); i < m; ++i)
-                if (fans.nbr(u, i) == v) {
-                    const i32 e = edges.slot[static_cast<std::size_t>(ou + u + i)];
-                    edges.slot[static_cast<std::size_t>(o + v + j)] = e;
-                    edges.s1[static_cast<std::size_t>(e)] = j;
-                    break;
-                }
+            // Where v sits in u's ring, from the triangle they share: in the
+            // slot of that triangle in u's fan, v is prev (j < k: the
+            // triangle of v's slot j runs v, u, ...) or next (j == k, v's
+            // extra border neighbour: the last triangle runs v, ..., u).
+            const i32 vs = o + (j < k ? j : k - 1);
+            const i32 c = fans.corner[static_cast<std::size_t>(vs)];
+            const i32 t = fans.face[static_cast<std::size_t>(vs)];
+            const i32 us = corner_slot[static_cast<std::size_t>(3 * t + (j < k ? (c + 1) % 3 : (c + 2) % 3))];
+            const i32 ou = fans.off[static_cast<std::size_t>(u)], ku = fans.k(u);
+            i32 i = us - ou;
+            if (j < k) i = i + 1 < ku ? i + 1 : (fans.border[static_cast<std::size_t>(u)] ? ku : 0);
+            const i32 e = edges.slot[static_cast<std::size_t>(ou + u + i)];
+            edges.slot[static_cast<std::size_t>(o + v + j)] = e;
+            edges.s1[static_cast<std::size_t>(e)] = j;
         }
         // Triangle edges: each is written by its tail vertex only.
         for (i32 j = 0, k = fans.k(v); j < k; ++j) {
