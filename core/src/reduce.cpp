@@ -1124,8 +1124,14 @@ private:
 // within path length 1 of S(o): best[v] is the best active operation touching
 // v, ring[v] the best over v's closed 1-ring, and o is picked when
 // ring[v] == o for all v in S(o) — the parallel form of the paper's
-// sequential choice, a scatter-max over vertices and then over their rings
-// (written as gathers, so no atomics). Two picked operations are at path
+// sequential choice: best[] is a max scattered from the operations (a
+// compare-and-swap loop when threaded; a max under a total order does not
+// depend on the order of the updates), ring[] a gather over 1-rings, and the
+// chosen operations stamp their closed neighbourhoods as claimed (they are
+// few, so this beats every vertex looking around itself). Priorities are
+// fixed within a round and legality does not depend on what else is chosen,
+// so passes that run to the end (selection_passes) choose exactly what the
+// sequential greedy choice in priority order would. Two picked operations are at path
 // length >= 2, so their leaves share no face and the tests of each stay valid
 // whatever the others do. In the first passes a picked operation runs its
 // legality tests when picked and, if it fails, is refused and claims nothing;
