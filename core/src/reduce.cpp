@@ -1175,8 +1175,7 @@ struct SelectScratch {
 class Selector {
 public:
     Selector(const Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, SelectScratch& scratch)
-        : s_(s), fans_(fans), edges_(edges), ops_(ops), best_(scratch.best), ring_(scratch.ring),
-          claimed_(scratch.claimed), mark_(scratch.mark), active_(scratch.active), scratch_(scratch) {}
+        : s_(s), fans_(fans), edges_(edges), ops_(ops), scratch_(scratch) {}
 
     // True when operation a ranks above operation b (b may be -1).
     bool beats(i32 a, i32 b) const {
@@ -1207,13 +1206,13 @@ public:
     void select(int threads, int max_passes, const std::vector<i32>& candidates,
                 std::vector<u8>& chosen, std::vector<u8>& refused, const Legal& legal) const {
         const i32 nv = s_.vertices(), ne = edges_.count();
-        best_.assign(static_cast<std::size_t>(nv), -1);
-        ring_.resize(static_cast<std::size_t>(nv));
-        claimed_.assign(static_cast<std::size_t>(nv), 0);
+        scratch_.best.assign(static_cast<std::size_t>(nv), -1);
+        scratch_.ring.resize(static_cast<std::size_t>(nv));
+        scratch_.claimed.assign(static_cast<std::size_t>(nv), 0);
         stamp_ = 0;
-        mark_.assign(static_cast<std::size_t>(nv), 0);
-        active_.assign(static_cast<std::size_t>(ne), 0);
-        for (const i32 e : candidates) active_[static_cast<std::size_t>(e)] = 1;
+        scratch_.mark.assign(static_cast<std::size_t>(nv), 0);
+        scratch_.active.assign(static_cast<std::size_t>(ne), 0);
+        for (const i32 e : candidates) scratch_.active[static_cast<std::size_t>(e)] = 1;
         std::vector<i32>& A = scratch_.active_list;
         A.assign(candidates.begin(), candidates.end());
         std::vector<i32>& T = scratch_.touched;
@@ -1229,7 +1228,7 @@ public:
                 });
                 next.clear();
                 for (const i32 e : A)
-                    if (refused[static_cast<std::size_t>(e)]) active_[static_cast<std::size_t>(e)] = 0;
+                    if (refused[static_cast<std::size_t>(e)]) scratch_.active[static_cast<std::size_t>(e)] = 0;
                     else next.push_back(e);
                 A.swap(next);
                 if (A.empty()) break;
@@ -1238,7 +1237,7 @@ public:
             // total order, so scattering from the operations gives the same
             // value in any order (a compare-and-swap loop when threaded).
             // T: the vertices touched (best[] is -1 everywhere else).
-            for (const i32 v : T) best_[static_cast<std::size_t>(v)] = -1;
+            for (const i32 v : T) scratch_.best[static_cast<std::size_t>(v)] = -1;
             T.clear();
             const i64 na = static_cast<i64>(A.size());
             if (threads > 1 && na > kParallelMin) {
@@ -1247,7 +1246,7 @@ public:
                     i32 vs[4];
                     const int n = touched(e, vs);
                     for (int i = 0; i < n; ++i) {
-                        std::atomic_ref<i32> best(best_[static_cast<std::size_t>(vs[i])]);
+                        std::atomic_ref<i32> best(scratch_.best[static_cast<std::size_t>(vs[i])]);
                         i32 current = best.load(std::memory_order_relaxed);
                         while (beats(e, current) && !best.compare_exchange_weak(current, e, std::memory_order_relaxed)) {
                         }
@@ -1257,18 +1256,18 @@ public:
                     i32 vs[4];
                     const int n = touched(e, vs);
                     for (int i = 0; i < n; ++i)
-                        if (!mark_[static_cast<std::size_t>(vs[i])]) {
-                            mark_[static_cast<std::size_t>(vs[i])] = 1;
+                        if (!scratch_.mark[static_cast<std::size_t>(vs[i])]) {
+                            scratch_.mark[static_cast<std::size_t>(vs[i])] = 1;
                             T.push_back(vs[i]);
                         }
                 }
-                for (const i32 v : T) mark_[static_cast<std::size_t>(v)] = 0;
+                for (const i32 v : T) scratch_.mark[static_cast<std::size_t>(v)] = 0;
             } else {
                 for (const i32 e : A) {
                     i32 vs[4];
                     const int n = touched(e, vs);
                     for (int i = 0; i < n; ++i) {
-                        i32& best = best_[static_cast<std::size_t>(vs[i])];
+                        i32& best = scratch_.best[static_cast<std::size_t>(vs[i])];
                         if (best < 0) T.push_back(vs[i]);
                         if (beats(e, best)) best = e;
                     }
@@ -1277,12 +1276,12 @@ public:
             const i64 nt = static_cast<i64>(T.size());
             parallel_for(threads, nt, [&](i64 ti) {
                 const i32 v = T[static_cast<std::size_t>(ti)];
-                i32 b = best_[static_cast<std::size_t>(v)];
+                i32 b = scratch_.best[static_cast<std::size_t>(v)];
                 for (i32 j = 0, n = fans_.nn(v); j < n; ++j) {
-                    const i32 x = best_[static_cast<std::size_t>(fans_.nbr(v, j))];
+                    const i32 x = scratch_.best[static_cast<std::size_t>(fans_.nbr(v, j))];
                     if (x >= 0 && beats(x, b)) b = x;
                 }
-                ring_[static_cast<std::size_t>(v)] = b;
+                scratch_.ring[static_cast<std::size_t>(v)] = b;
             });
             // An operation that wins at every vertex it touches is picked; in
             // the first passes it runs its legality tests now.
@@ -1296,7 +1295,7 @@ public:
                 i32 vs[4];
                 const int n = touched(e, vs);
                 bool win = true;
-                for (int i = 0; i < n && win; ++i) win = ring_[static_cast<std::size_t>(vs[i])] == e;
+                for (int i = 0; i < n && win; ++i) win = scratch_.ring[static_cast<std::size_t>(vs[i])] == e;
                 if (!win) continue;
                 picked[static_cast<std::size_t>(ai)] = 1;
                 if (lazy && !legal(e, true)) {
@@ -1328,10 +1327,10 @@ public:
                 if (keep) {
                     i32 vs[4];
                     const int n = touched(e, vs);
-                    for (int i = 0; i < n && keep; ++i) keep = claimed_[static_cast<std::size_t>(vs[i])] != stamp_;
+                    for (int i = 0; i < n && keep; ++i) keep = scratch_.claimed[static_cast<std::size_t>(vs[i])] != stamp_;
                 }
                 if (keep) next.push_back(e);
-                else active_[static_cast<std::size_t>(e)] = 0;
+                else scratch_.active[static_cast<std::size_t>(e)] = 0;
             }
             A.swap(next);
         }
@@ -1343,14 +1342,9 @@ private:
     const Edges& edges_;
     const Ops& ops_;
     void claim(i32 v) const {
-        std::atomic_ref<i32>(claimed_[static_cast<std::size_t>(v)]).store(stamp_, std::memory_order_relaxed);
+        std::atomic_ref<i32>(scratch_.claimed[static_cast<std::size_t>(v)]).store(stamp_, std::memory_order_relaxed);
     }
 
-    std::vector<i32>& best_;
-    std::vector<i32>& ring_;
-    std::vector<i32>& claimed_;
-    std::vector<u8>& mark_;
-    std::vector<u8>& active_;
     SelectScratch& scratch_;
     mutable i32 stamp_ = 0;
 };
