@@ -20,7 +20,6 @@ Job::Job(const JobConfig& config) : config_(config) {
     if (!std::isfinite(level)) throw Error("isosurface level is not a finite number");
     level_ = static_cast<float>(level);
     reduce_options_ = config.reduce_options;
-    reduce_options_.threads = config.threads;
     if (config.max_error_spacings > 0) reduce_options_.max_error = config.max_error_spacings * lattice_->spacing();
 }
 
@@ -30,17 +29,18 @@ std::string Job::describe(int task) const {
     return "seam of domains " + std::to_string(n.first) + "-" + std::to_string(n.first + n.count - 1);
 }
 
-Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& record) const {
+Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& record, int threads) const {
     const BisectionNode& n = node(task);
     record.task = task;
     record.kind = kind(task);
     record.first_domain = n.first;
     record.domain_count = n.count;
+    record.threads = threads;
     if (n.count == 1) {
         const Domain domain = decomposition_->make_domain(n.first, *field_);
-        Piece piece = extract(domain, level_, ExtractOptions{config_.threads});
+        Piece piece = extract(domain, level_, ExtractOptions{threads});
         record.triangles_in = piece.triangle_count();
-        if (config_.reduce) piece = reduce(piece, reduce_options_);
+        if (config_.reduce) piece = reduce(piece, reduce_options(threads));
         record.triangles_out = piece.triangle_count();
         return piece;
     }
@@ -48,7 +48,7 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
     record.triangles_in = left->triangle_count() + right->triangle_count();
     SeamOptions seam_options;
     seam_options.reduce = config_.reduce;
-    seam_options.reduce_options = reduce_options_;
+    seam_options.reduce_options = reduce_options(threads);
     seam_options.rings = config_.seam_rings;
     Piece piece = seam(*left, *right,
                        [this](GlobalId a, GlobalId b) { return decomposition_->domains_of_edge(a, b); },
@@ -105,7 +105,7 @@ JobResult run_local(const Job& job, const Progress& progress) {
         const Piece* left = n.left >= 0 ? &*pieces[static_cast<std::size_t>(n.left)] : nullptr;
         const Piece* right = n.right >= 0 ? &*pieces[static_cast<std::size_t>(n.right)] : nullptr;
         try {
-            pieces[static_cast<std::size_t>(task)] = job.execute(task, left, right, record);
+            pieces[static_cast<std::size_t>(task)] = job.execute(task, left, right, record, job.config().threads);
         } catch (const Error& e) {
             throw Error("task '" + job.describe(task) + "' failed: " + e.what());
         } catch (const std::bad_alloc&) {
