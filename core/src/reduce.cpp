@@ -1536,7 +1536,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     const auto start_time = std::chrono::steady_clock::now();
     check_options(options);
     check_input(in);
-    const int threads = resolve_threads(options.threads);
+    int threads = resolve_threads(options.threads);
     const Params params{options.phi,
                         std::sin(options.min_angle_degrees * kPi / 180.0),
                         std::cos(options.max_normal_turn_degrees * kPi / 180.0),
@@ -1581,6 +1581,8 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     // The first build_fans validates the input: it throws on non-manifold or
     // misoriented input before anything is changed.
     for (int round = 0;; ++round) {
+        if (options.more_threads)
+            if (const int offered = options.more_threads(); offered > 0) threads = offered;
         auto t0 = now();
         build_fans(s, threads, round == 0, fans, scratch_a, scratch_b);
         st.fans += since(t0);

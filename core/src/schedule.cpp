@@ -29,16 +29,17 @@ std::string Job::describe(int task) const {
     return "seam of domains " + std::to_string(n.first) + "-" + std::to_string(n.first + n.count - 1);
 }
 
-Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& record, int threads) const {
+Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& record,
+                   const TaskThreads& threads) const {
     const BisectionNode& n = node(task);
     record.task = task;
     record.kind = kind(task);
     record.first_domain = n.first;
     record.domain_count = n.count;
-    record.threads = threads;
+    record.threads = threads.count;
     if (n.count == 1) {
         const Domain domain = decomposition_->make_domain(n.first, *field_);
-        Piece piece = extract(domain, level_, ExtractOptions{threads});
+        Piece piece = extract(domain, level_, ExtractOptions{threads.count});
         record.triangles_in = piece.triangle_count();
         if (config_.reduce) piece = reduce(piece, reduce_options(threads));
         record.triangles_out = piece.triangle_count();
@@ -105,7 +106,7 @@ JobResult run_local(const Job& job, const Progress& progress) {
         const Piece* left = n.left >= 0 ? &*pieces[static_cast<std::size_t>(n.left)] : nullptr;
         const Piece* right = n.right >= 0 ? &*pieces[static_cast<std::size_t>(n.right)] : nullptr;
         try {
-            pieces[static_cast<std::size_t>(task)] = job.execute(task, left, right, record, job.config().threads);
+            pieces[static_cast<std::size_t>(task)] = job.execute(task, left, right, record, TaskThreads{job.config().threads, {}});
         } catch (const Error& e) {
             throw Error("task '" + job.describe(task) + "' failed: " + e.what());
         } catch (const std::bad_alloc&) {

@@ -19,7 +19,8 @@ using namespace tetiso;
 class FailingJob : public Job {
 public:
     FailingJob(const JobConfig& config, int fail) : Job(config), fail_(fail) {}
-    Piece execute(int task, const Piece* left, const Piece* right, TaskRecord& record, int threads) const override {
+    Piece execute(int task, const Piece* left, const Piece* right, TaskRecord& record,
+                  const TaskThreads& threads) const override {
         if (task == fail_) throw Error("injected failure");
         return Job::execute(task, left, right, record, threads);
     }

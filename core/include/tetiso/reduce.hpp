@@ -19,6 +19,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "tetiso/mesh.hpp"
@@ -36,6 +37,10 @@ struct ReduceOptions {
     double phi = 0.9;
     // Threads; 0 means OpenMP's default. The output does not depend on it.
     int threads = 1;
+    // Where set, asked before every round for the threads that round may use
+    // (0 or less: keep the current count); lets a job hand a running
+    // reduction the cores of workers that ran out of work.
+    std::function<int()> more_threads;
     // Upper bound on the number of rounds (>= 0).
     int max_rounds = 200;
     // Smallest angle of the new triangles: a collapse or flip may not make

@@ -42,13 +42,21 @@ struct JobConfig {
 
 enum class TaskKind : std::int32_t { domain = 0, seam = 1 };
 
+// The threads a task runs with: `count` to begin with and, where `more` is
+// set, what it offers before each reduction round (ReduceOptions::
+// more_threads): cores that workers with nothing left to do lend.
+struct TaskThreads {
+    int count = 1;
+    std::function<int()> more;
+};
+
 struct TaskRecord {
     std::int32_t task = 0;
     TaskKind kind = TaskKind::domain;
     std::int32_t first_domain = 0;   // the task covers domains [first, first + count)
     std::int32_t domain_count = 1;
     std::int32_t rank = 0;           // who ran it
-    std::int32_t threads = 1;        // with how many threads
+    std::int32_t threads = 1;        // with how many threads (the most it had)
     double start = 0, end = 0;       // seconds since the job started, on rank 0's clock
     std::uint64_t triangles_in = 0;  // extracted triangles, or the two pieces' sum
     std::uint64_t triangles_out = 0;
@@ -81,19 +89,20 @@ public:
     TaskKind kind(int task) const { return node(task).count == 1 ? TaskKind::domain : TaskKind::seam; }
     std::string describe(int task) const;
 
-    // Runs one task with `threads` threads (config().threads, except where
-    // the rank running it has borrowed idle workers' cores). A domain task
-    // takes no pieces; a seam task takes its two children's. Fills
-    // triangles_in / triangles_out of `record`. The result does not depend on
-    // `threads`. Virtual so that a test can make a task fail that no input
-    // makes fail, such as the root seam, which runs on rank 0
-    // (validation/mpi/test_mpi_failure.cpp).
-    virtual Piece execute(int task, const Piece* left, const Piece* right, TaskRecord& record, int threads) const;
+    // Runs one task. A domain task takes no pieces; a seam task takes its
+    // two children's. Fills triangles_in / triangles_out of `record`. The
+    // result does not depend on `threads` (config().threads, except where
+    // the rank running the task has borrowed idle workers' cores). Virtual so
+    // that a test can make a task fail that no input makes fail, such as the
+    // root seam, which runs on rank 0 (validation/mpi/test_mpi_failure.cpp).
+    virtual Piece execute(int task, const Piece* left, const Piece* right, TaskRecord& record,
+                          const TaskThreads& threads) const;
 
 private:
-    ReduceOptions reduce_options(int threads) const {
+    ReduceOptions reduce_options(const TaskThreads& threads) const {
         ReduceOptions options = reduce_options_;
-        options.threads = threads;
+        options.threads = threads.count;
+        options.more_threads = threads.more;
         return options;
     }
 
