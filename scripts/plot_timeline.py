@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
 """Draws the timeline of a `tetiso run --report` file: one row per rank, one
-bar per task (domain tasks and seams in two colours).
+bar per task (domain tasks and seams in two colours); a task that ran with
+more than one thread (cores lent by idle workers) is labelled with the most
+it had, e.g. "x4".
 
     scripts/plot_timeline.py report.json -o timeline.png
 """
@@ -30,6 +32,9 @@ def main():
         for start, width, y in bars:
             ax.barh(y, width, left=start, height=0.8, color=colours[kind], edgecolor="black", linewidth=0.2)
         ax.barh(-10, 0, color=colours[kind], label=f"{kind} ({len(bars)})")
+    for t in tasks:
+        if t.get("threads", 1) > 1 and t["kind"] == "domain":
+            ax.text(t["end"], row[t["rank"]], f" x{t['threads']}", va="center", ha="left", fontsize=7)
     ax.set_ylim(-0.6, len(ranks) - 0.4)
     ax.set_yticks(range(len(ranks)), [f"rank {r}" for r in ranks])
     ax.set_xlabel("seconds since the job started")
@@ -37,7 +42,7 @@ def main():
         f"tetiso run: N={report['lattice']}, D={report['domains']}, {report['workers']} workers, "
         f"{report['seconds']['job']:.2f} s, {report['raw_triangles']:,} -> {report['triangles']:,} triangles"
     )
-    ax.legend(loc="lower right")
+    ax.legend(loc="lower left")  # rank 0 works only at the end: its row starts empty
     fig.tight_layout()
     fig.savefig(args.output, dpi=120)
 
