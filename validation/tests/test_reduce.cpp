@@ -570,5 +570,27 @@ TEST(Reduce, OutputDoesNotDependOnThreadsOrRuns) {
     EXPECT_LT(a.triangle_count(), in.triangle_count());
 }
 
+// The job lends a running reduction more cores between rounds
+// (ReduceOptions::more_threads): the count changing mid-call must not
+// change the result either.
+TEST(Reduce, ThreadsOfferedBetweenRoundsChangeNothing) {
+    const Piece in = lattice_surface(40, 1, "gyroid");
+    ReduceOptions o;
+    o.max_error = 0.4 * Lattice(40).spacing();
+    ReduceReport single_report;
+    const Piece single = reduce(in, o, &single_report);
+    int asked = 0;
+    o.more_threads = [&asked] {
+        ++asked;
+        return asked % 3 == 0 ? 3 : asked % 3 == 1 ? 0 : 2; // keep, 2, 3, keep, ...
+    };
+    ReduceReport report;
+    const Piece varied = reduce(in, o, &report);
+    EXPECT_TRUE(identical(single, varied));
+    // Asked before every round, the last one (which finds nothing) included.
+    EXPECT_GE(asked, static_cast<int>(report.rounds.size()));
+    EXPECT_EQ(report.rounds.size(), single_report.rounds.size());
+}
+
 } // namespace
 } // namespace tetiso
