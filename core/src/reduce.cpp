@@ -1168,6 +1168,7 @@ constexpr u8 kChosen = 1, kChosenTested = 2;
 // glibc was told to keep freed memory, so page faults are not free there).
 struct SelectScratch {
     std::vector<i32> best, ring, active_list, touched, next;
+    std::vector<std::vector<i32>> per_thread; // vertices each thread touched first
     std::vector<u8> mark, active, picked;
     std::vector<i32> claimed; // == the pass's stamp: within path length 1 of a chosen operation
 };
@@ -1240,29 +1241,41 @@ public:
             for (const i32 v : T) scratch_.best[static_cast<std::size_t>(v)] = -1;
             T.clear();
             const i64 na = static_cast<i64>(A.size());
+#ifdef _OPENMP
             if (threads > 1 && na > kParallelMin) {
-                parallel_for(threads, na, [&](i64 ai) {
-                    const i32 e = A[static_cast<std::size_t>(ai)];
-                    i32 vs[4];
-                    const int n = touched(e, vs);
-                    for (int i = 0; i < n; ++i) {
-                        std::atomic_ref<i32> best(scratch_.best[static_cast<std::size_t>(vs[i])]);
-                        i32 current = best.load(std::memory_order_relaxed);
-                        while (beats(e, current) && !best.compare_exchange_weak(current, e, std::memory_order_relaxed)) {
+                // Each thread lists the vertices it marked first; T's order
+                // differs from run to run, but only sets are read from it.
+                scratch_.per_thread.resize(static_cast<std::size_t>(threads));
+#pragma omp parallel num_threads(threads)
+                {
+                    std::vector<i32>& mine = scratch_.per_thread[static_cast<std::size_t>(omp_get_thread_num())];
+                    mine.clear();
+#pragma omp for schedule(static)
+                    for (i64 ai = 0; ai < na; ++ai) {
+                        const i32 e = A[static_cast<std::size_t>(ai)];
+                        i32 vs[4];
+                        const int n = touched(e, vs);
+                        for (int i = 0; i < n; ++i) {
+                            const auto v = static_cast<std::size_t>(vs[i]);
+                            std::atomic_ref<i32> best(scratch_.best[v]);
+                            i32 current = best.load(std::memory_order_relaxed);
+                            while (beats(e, current) &&
+                                   !best.compare_exchange_weak(current, e, std::memory_order_relaxed)) {
+                            }
+                            if (!std::atomic_ref<u8>(scratch_.mark[v]).exchange(1, std::memory_order_relaxed))
+                                mine.push_back(vs[i]);
                         }
                     }
-                });
-                for (const i32 e : A) {
-                    i32 vs[4];
-                    const int n = touched(e, vs);
-                    for (int i = 0; i < n; ++i)
-                        if (!scratch_.mark[static_cast<std::size_t>(vs[i])]) {
-                            scratch_.mark[static_cast<std::size_t>(vs[i])] = 1;
-                            T.push_back(vs[i]);
-                        }
                 }
-                for (const i32 v : T) scratch_.mark[static_cast<std::size_t>(v)] = 0;
-            } else {
+                for (int t = 0; t < threads; ++t) {
+                    const std::vector<i32>& theirs = scratch_.per_thread[static_cast<std::size_t>(t)];
+                    T.insert(T.end(), theirs.begin(), theirs.end());
+                }
+                parallel_for(threads, static_cast<i64>(T.size()),
+                             [&](i64 ti) { scratch_.mark[static_cast<std::size_t>(T[static_cast<std::size_t>(ti)])] = 0; });
+            } else
+#endif
+            {
                 for (const i32 e : A) {
                     i32 vs[4];
                     const int n = touched(e, vs);
@@ -1320,17 +1333,20 @@ public:
                     for (i32 j = 0, m = fans_.nn(vs[i]); j < m; ++j) claim(fans_.nbr(vs[i], j));
                 }
             });
+            // What stays active: neither picked nor claimed. The test runs in
+            // parallel and leaves its answer in picked[] (1: drop); the
+            // compaction after it only reads that array in order.
+            parallel_for(threads, na, [&](i64 ai) {
+                u8& drop = picked[static_cast<std::size_t>(ai)];
+                if (drop) return;
+                i32 vs[4];
+                const int n = touched(A[static_cast<std::size_t>(ai)], vs);
+                for (int i = 0; i < n && !drop; ++i) drop = scratch_.claimed[static_cast<std::size_t>(vs[i])] == stamp_;
+            });
             next.clear();
             for (std::size_t ai = 0; ai < A.size(); ++ai) {
-                const i32 e = A[ai];
-                bool keep = !picked[ai];
-                if (keep) {
-                    i32 vs[4];
-                    const int n = touched(e, vs);
-                    for (int i = 0; i < n && keep; ++i) keep = scratch_.claimed[static_cast<std::size_t>(vs[i])] != stamp_;
-                }
-                if (keep) next.push_back(e);
-                else scratch_.active[static_cast<std::size_t>(e)] = 0;
+                if (!picked[ai]) next.push_back(A[ai]);
+                else scratch_.active[static_cast<std::size_t>(A[ai])] = 0;
             }
             A.swap(next);
         }
