@@ -143,9 +143,8 @@ void wait_for_message(int from, MPI_Status& status) {
     }
 }
 
-// Receives the next message from `from` (or any rank), whatever its size.
-std::vector<std::byte> receive(int from, MPI_Status& status) {
-    wait_for_message(from, status);
+// Receives the message a probe found, whatever its size.
+std::vector<std::byte> receive_probed(const MPI_Status& status) {
     int size = 0;
     MPI_Get_count(&status, MPI_BYTE, &size);
     std::vector<std::byte> bytes(static_cast<std::size_t>(size));
@@ -153,12 +152,23 @@ std::vector<std::byte> receive(int from, MPI_Status& status) {
     return bytes;
 }
 
-// The cores this process may run on (the launcher's binding), as the bytes
-// of a cpu_set_t; empty where that is not known.
-std::vector<std::byte> own_cores() {
-    cpu_set_t cores;
+// Receives the next message from `from` (or any rank).
+std::vector<std::byte> receive(int from, MPI_Status& status) {
+    wait_for_message(from, status);
+    return receive_probed(status);
+}
+
+// The cores the calling thread may run on (the launcher's binding); false
+// where that is not known.
+bool current_cores(cpu_set_t& cores) {
     CPU_ZERO(&cores);
-    if (sched_getaffinity(0, sizeof cores, &cores) != 0) return {};
+    return sched_getaffinity(0, sizeof cores, &cores) == 0;
+}
+
+// current_cores() as a message: the bytes of a cpu_set_t, or none.
+std::vector<std::byte> cores_message() {
+    cpu_set_t cores;
+    if (!current_cores(cores)) return {};
     std::vector<std::byte> bytes(sizeof cores);
     std::memcpy(bytes.data(), &cores, sizeof cores);
     return bytes;
@@ -183,11 +193,8 @@ void run_on(const cpu_set_t& cores, int threads) {
 // calls MPI.
 class LentCores {
 public:
-    explicit LentCores(int threads_per_worker) : per_worker_(std::max(1, threads_per_worker)) {
-        CPU_ZERO(&own_);
-        known_ = sched_getaffinity(0, sizeof own_, &own_) == 0;
-        cores_ = own_;
-    }
+    explicit LentCores(int threads_per_worker)
+        : per_worker_(std::max(1, threads_per_worker)), known_(current_cores(own_)), cores_(own_) {}
 
     // Takes the lends that have arrived; returns the threads to use now, or
     // 0 when nothing changed.
@@ -198,7 +205,7 @@ public:
             MPI_Status status;
             MPI_Iprobe(0, kLend, MPI_COMM_WORLD, &arrived, &status);
             if (!arrived) break;
-            const std::vector<std::byte> message = receive(0, status);
+            const std::vector<std::byte> message = receive_probed(status);
             if (message.size() == sizeof(cpu_set_t)) {
                 cpu_set_t lent;
                 std::memcpy(&lent, message.data(), sizeof lent);
@@ -226,8 +233,9 @@ public:
 
 private:
     int per_worker_;
-    cpu_set_t own_, cores_;
-    bool known_ = false;
+    cpu_set_t own_;
+    bool known_;
+    cpu_set_t cores_;
     int lends_ = 0;
     int most_ = per_worker_;
 };
@@ -235,7 +243,7 @@ private:
 void work(const Job& job) {
     // The first "ready" names this worker's cores, which rank 0 lends to
     // other ranks when this worker has nothing to do (control()).
-    send(own_cores(), 0, kReady);
+    send(cores_message(), 0, kReady);
     LentCores lent(job.config().threads);
     for (;;) {
         MPI_Status status;
@@ -330,10 +338,9 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
     // per rank's share, on the union of the ranks' bindings. Threads do not
     // change the result. The job's last seams, mostly their reduction near
     // the seam, were 1.7 s of a 25.9 s job at 15 workers, with 15 cores idle.
-    cpu_set_t own_cores, job_cores;
-    CPU_ZERO(&own_cores);
-    const bool own_cores_known = sched_getaffinity(0, sizeof own_cores, &own_cores) == 0;
-    job_cores = own_cores;
+    cpu_set_t own_cores;
+    const bool own_cores_known = current_cores(own_cores);
+    cpu_set_t job_cores = own_cores;
     auto execute_here = [&] {
         const int task = queue.pop();
         const BisectionNode& n = job.node(task);
