@@ -1594,7 +1594,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     Surface spare; // compact()'s second triangle and error arrays
     std::vector<u8> chosen, refused, vertex_alive, triangle_alive;
     std::vector<u8> quiet(in.vertex_count(), 0), changed(in.vertex_count(), 0);
-    std::vector<i32> candidate_list;
+    std::vector<i32> candidate_list, to_move;
     SelectScratch select_scratch;
     int idle_rounds = 0;
     Samples samples;
@@ -1655,21 +1655,31 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
             if (!refused[static_cast<std::size_t>(e)]) quiet[static_cast<std::size_t>(edges.v0[static_cast<std::size_t>(e)])] = 0;
         st.select += since(t0);
         t0 = now();
-        for (i32 e = 0; e < ne; ++e)
-            if (chosen[static_cast<std::size_t>(e)]) {
-                if (ops.kind[static_cast<std::size_t>(e)] == kCollapse) ++stats.collapses;
-                else ++stats.flips;
-            }
+        // Samples still to move: those of the flips and of the collapses
+        // chosen without a committed test (a collapse tested when chosen
+        // moved its samples then).
+        to_move.clear();
+        for (i32 e = 0; e < ne; ++e) {
+            const auto i = static_cast<std::size_t>(e);
+            if (!chosen[i]) continue;
+            if (ops.kind[i] == kCollapse) ++stats.collapses;
+            else ++stats.flips;
+            if (ops.kind[i] == kFlip || chosen[i] != kChosenTested) to_move.push_back(e);
+        }
         // The samples move first: they are placed on the new faces by
-        // reading the fans and positions that their legality test read.
-        if (samples.on())
-            parallel_for(threads, ne, [&](i64 ei) {
-                const auto e = static_cast<std::size_t>(ei);
-                if (!chosen[e]) return;
-                if (ops.kind[e] == kCollapse && chosen[e] == kChosenTested) return; // moved when tested
-                if (ops.kind[e] == kFlip) evaluator.move_flip_samples(static_cast<i32>(e), samples.owner);
-                else evaluator.move_collapse_samples(static_cast<i32>(e), ops, samples.owner);
-            });
+        // reading the fans and positions that their legality test read. Each
+        // move costs about what a legality test does.
+        if (samples.on()) {
+            const i64 moves = static_cast<i64>(to_move.size());
+#ifdef _OPENMP
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 16) if (threads > 1 && moves > kParallelMinTests)
+#endif
+            for (i64 m = 0; m < moves; ++m) {
+                const i32 e = to_move[static_cast<std::size_t>(m)];
+                if (ops.kind[static_cast<std::size_t>(e)] == kFlip) evaluator.move_flip_samples(e, samples.owner);
+                else evaluator.move_collapse_samples(e, ops, samples.owner);
+            }
+        }
         apply(s, fans, edges, ops, chosen, threads, vertex_alive, triangle_alive, changed);
         st.apply += since(t0);
         t0 = now();
