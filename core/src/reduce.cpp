@@ -1175,7 +1175,7 @@ constexpr u8 kChosen = 1, kChosenTested = 2;
 struct SelectScratch {
     std::vector<i32> best, ring, active_list, touched, next;
     std::vector<std::vector<i32>> per_thread; // vertices each thread touched first
-    std::vector<u8> mark, active, picked;
+    std::vector<u8> mark, picked;
     std::vector<i32> claimed; // == the pass's stamp: within path length 1 of a chosen operation
 };
 
@@ -1212,14 +1212,12 @@ public:
     template <class Legal>
     void select(int threads, int max_passes, const std::vector<i32>& candidates,
                 std::vector<u8>& chosen, std::vector<u8>& refused, const Legal& legal) const {
-        const i32 nv = s_.vertices(), ne = edges_.count();
+        const i32 nv = s_.vertices();
         scratch_.best.assign(static_cast<std::size_t>(nv), -1);
         scratch_.ring.resize(static_cast<std::size_t>(nv));
         scratch_.claimed.assign(static_cast<std::size_t>(nv), 0);
         stamp_ = 0;
         scratch_.mark.assign(static_cast<std::size_t>(nv), 0);
-        scratch_.active.assign(static_cast<std::size_t>(ne), 0);
-        for (const i32 e : candidates) scratch_.active[static_cast<std::size_t>(e)] = 1;
         std::vector<i32>& A = scratch_.active_list;
         A.assign(candidates.begin(), candidates.end());
         std::vector<i32>& T = scratch_.touched;
@@ -1239,8 +1237,7 @@ public:
                 }
                 next.clear();
                 for (const i32 e : A)
-                    if (refused[static_cast<std::size_t>(e)]) scratch_.active[static_cast<std::size_t>(e)] = 0;
-                    else next.push_back(e);
+                    if (!refused[static_cast<std::size_t>(e)]) next.push_back(e);
                 A.swap(next);
                 if (A.empty()) break;
             }
@@ -1354,10 +1351,8 @@ public:
                 for (int i = 0; i < n && !drop; ++i) drop = scratch_.claimed[static_cast<std::size_t>(vs[i])] == stamp_;
             });
             next.clear();
-            for (std::size_t ai = 0; ai < A.size(); ++ai) {
+            for (std::size_t ai = 0; ai < A.size(); ++ai)
                 if (!picked[ai]) next.push_back(A[ai]);
-                else scratch_.active[static_cast<std::size_t>(A[ai])] = 0;
-            }
             A.swap(next);
         }
     }
