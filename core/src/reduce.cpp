@@ -70,8 +70,9 @@ constexpr i64 kParallelMin = 16384;
 // The same for loops that run legality tests, which cost microseconds each
 // and most in the late rounds, where the candidates are few: with the
 // threshold above, a domain's late rounds ran on one thread whatever the
-// count (on the device, a domain-sized surface's selection gained 1.8x from
-// 16 threads and its proposals 4.5x; with this one the selection gains 2.9x).
+// count (on the device, a domain-sized surface's selection gained 1.7x from
+// 16 threads and its proposals 4.0x; with this one the selection gains 2.9x:
+// results/speedup/device-n500-s8-reduce-threads.txt).
 constexpr i64 kParallelMinTests = 64;
 
 template <class Function>
@@ -79,6 +80,21 @@ void parallel_for(int threads, i64 n, const Function& function) {
 #ifdef _OPENMP
     if (threads > 1 && n > kParallelMin) {
 #pragma omp parallel for num_threads(threads) schedule(static)
+        for (i64 i = 0; i < n; ++i) function(i);
+        return;
+    }
+#endif
+    (void)threads;
+    for (i64 i = 0; i < n; ++i) function(i);
+}
+
+// parallel_for for loops of legality tests (or sample moves, which cost as
+// much): few elements, uneven costs, so a low threshold and dynamic chunks.
+template <class Function>
+void parallel_for_tests(int threads, i64 n, const Function& function) {
+#ifdef _OPENMP
+    if (threads > 1 && n > kParallelMinTests) {
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 16)
         for (i64 i = 0; i < n; ++i) function(i);
         return;
     }
@@ -1227,14 +1243,10 @@ public:
         for (int pass = 0; pass < max_passes && !A.empty(); ++pass) {
             if (pass == kLazyPasses) {
                 // What the first passes left: test it all at once.
-                const i64 left = static_cast<i64>(A.size());
-#ifdef _OPENMP
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 16) if (threads > 1 && left > kParallelMinTests)
-#endif
-                for (i64 ai = 0; ai < left; ++ai) {
+                parallel_for_tests(threads, static_cast<i64>(A.size()), [&](i64 ai) {
                     const i32 e = A[static_cast<std::size_t>(ai)];
                     if (!legal(e, false)) refused[static_cast<std::size_t>(e)] = 1;
-                }
+                });
                 next.clear();
                 for (const i32 e : A)
                     if (!refused[static_cast<std::size_t>(e)]) next.push_back(e);
@@ -1307,23 +1319,20 @@ public:
             // the first passes it runs its legality tests now.
             picked.assign(A.size(), 0);
             const bool lazy = pass < kLazyPasses;
-#ifdef _OPENMP
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 16) if (threads > 1 && na > kParallelMinTests)
-#endif
-            for (i64 ai = 0; ai < na; ++ai) {
+            parallel_for_tests(threads, na, [&](i64 ai) {
                 const i32 e = A[static_cast<std::size_t>(ai)];
                 i32 vs[4];
                 const int n = touched(e, vs);
                 bool win = true;
                 for (int i = 0; i < n && win; ++i) win = scratch_.ring[static_cast<std::size_t>(vs[i])] == e;
-                if (!win) continue;
+                if (!win) return;
                 picked[static_cast<std::size_t>(ai)] = 1;
                 if (lazy && !legal(e, true)) {
                     refused[static_cast<std::size_t>(e)] = 1;
-                    continue;
+                    return;
                 }
                 chosen[static_cast<std::size_t>(e)] = lazy ? kChosenTested : kChosen;
-            }
+            });
             // Claimed: within path length 1 of a chosen operation. The chosen
             // are few (about one in twenty in a round's first pass), so they
             // stamp their closed neighbourhoods rather than every touched
@@ -1664,17 +1673,12 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         // The samples move first: they are placed on the new faces by
         // reading the fans and positions that their legality test read. Each
         // move costs about what a legality test does.
-        if (samples.on()) {
-            const i64 moves = static_cast<i64>(to_move.size());
-#ifdef _OPENMP
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 16) if (threads > 1 && moves > kParallelMinTests)
-#endif
-            for (i64 m = 0; m < moves; ++m) {
+        if (samples.on())
+            parallel_for_tests(threads, static_cast<i64>(to_move.size()), [&](i64 m) {
                 const i32 e = to_move[static_cast<std::size_t>(m)];
                 if (ops.kind[static_cast<std::size_t>(e)] == kFlip) evaluator.move_flip_samples(e, samples.owner);
                 else evaluator.move_collapse_samples(e, ops, samples.owner);
-            }
-        }
+            });
         apply(s, fans, edges, ops, chosen, threads, vertex_alive, triangle_alive, changed);
         st.apply += since(t0);
         t0 = now();
