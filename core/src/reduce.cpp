@@ -49,6 +49,7 @@ namespace {
 
 using i32 = std::int32_t;
 using i64 = std::int64_t;
+using u32 = std::uint32_t;
 using u64 = std::uint64_t;
 using u8 = std::uint8_t;
 
@@ -1166,7 +1167,9 @@ private:
 // repeat over the shrinking active set until it is empty: the result is a
 // maximal independent set of legal operations, and an illegal operation
 // never blocks its neighbours. Ties in priority fall to the vertex keys,
-// never to thread or order.
+// never to thread or order. On one thread the sequential greedy choice runs
+// as such (choose_in_order), and it also finishes whatever the passes leave
+// active after selection_passes, so the set is the same for every count.
 
 // Passes in which a picked operation runs its legality tests when picked;
 // after them every remaining operation is tested at once, so that chains of
@@ -1193,6 +1196,10 @@ struct SelectScratch {
     std::vector<std::vector<i32>> per_thread; // vertices each thread touched first
     std::vector<u8> mark, picked;
     std::vector<i32> claimed; // == the pass's stamp: within path length 1 of a chosen operation
+    // The sequential choice's order (a radix sort by priority).
+    std::vector<u64> sort_key, sort_key_spare;
+    std::vector<i32> order, order_spare;
+    std::vector<u32> histogram;
 };
 
 class Selector {
@@ -1225,14 +1232,22 @@ public:
     // candidates: the edges with an operation, ascending. Sets chosen[e] for
     // the operations chosen (kChosen or kChosenTested), refused[e] for those
     // found illegal. legal(e, commit): commit is true when e is chosen if legal.
+    // On one thread the choice is made in one sweep in priority order (the
+    // passes below choose the same set, at more cost on one thread);
+    // with more, by passes, the last of which (max_passes) hands what is
+    // still active to the same sweep, so the set never depends on the count.
     template <class Legal>
     void select(int threads, int max_passes, const std::vector<i32>& candidates,
                 std::vector<u8>& chosen, std::vector<u8>& refused, const Legal& legal) const {
         const i32 nv = s_.vertices();
-        scratch_.best.assign(static_cast<std::size_t>(nv), -1);
-        scratch_.ring.resize(static_cast<std::size_t>(nv));
         scratch_.claimed.assign(static_cast<std::size_t>(nv), 0);
         stamp_ = 0;
+        if (threads <= 1) {
+            choose_in_order(candidates, chosen, refused, legal);
+            return;
+        }
+        scratch_.best.assign(static_cast<std::size_t>(nv), -1);
+        scratch_.ring.resize(static_cast<std::size_t>(nv));
         scratch_.mark.assign(static_cast<std::size_t>(nv), 0);
         std::vector<i32>& A = scratch_.active_list;
         A.assign(candidates.begin(), candidates.end());
@@ -1364,9 +1379,85 @@ public:
                 if (!picked[ai]) next.push_back(A[ai]);
             A.swap(next);
         }
+        if (!A.empty()) choose_in_order(A, chosen, refused, legal);
     }
 
 private:
+    // The sequential greedy choice: operations in descending priority, each
+    // taken when it is clear of those taken before and legal. ops holds no
+    // operation within path length 1 of one chosen earlier in the round, so
+    // finishing the passes' work this way gives what the passes would.
+    template <class Legal>
+    void choose_in_order(const std::vector<i32>& ops, std::vector<u8>& chosen, std::vector<u8>& refused,
+                         const Legal& legal) const {
+        order_by_priority(ops);
+        ++stamp_;
+        for (const i32 e : scratch_.order) {
+            i32 vs[4];
+            const int n = touched(e, vs);
+            bool clear = true;
+            for (int i = 0; i < n && clear; ++i) clear = scratch_.claimed[static_cast<std::size_t>(vs[i])] != stamp_;
+            if (!clear) continue;
+            if (!legal(e, true)) {
+                refused[static_cast<std::size_t>(e)] = 1;
+                continue;
+            }
+            chosen[static_cast<std::size_t>(e)] = kChosenTested;
+            for (int i = 0; i < n; ++i) {
+                claim(vs[i]);
+                for (i32 j = 0, m = fans_.nn(vs[i]); j < m; ++j) claim(fans_.nbr(vs[i], j));
+            }
+        }
+    }
+
+    // scratch_.order = ops, best first (beats() order): a stable LSD radix
+    // sort of the complemented priorities by 16-bit digits, skipping the
+    // digits all share; equal priorities (rare: 40 of their bits are a
+    // hash) are then put in beats() order.
+    void order_by_priority(const std::vector<i32>& ops) const {
+        const std::size_t n = ops.size();
+        std::vector<u64>& key = scratch_.sort_key;
+        std::vector<u64>& key_spare = scratch_.sort_key_spare;
+        std::vector<i32>& order = scratch_.order;
+        std::vector<i32>& order_spare = scratch_.order_spare;
+        key.resize(n);
+        key_spare.resize(n);
+        order.assign(ops.begin(), ops.end());
+        order_spare.resize(n);
+        for (std::size_t i = 0; i < n; ++i) key[i] = ~ops_.priority[static_cast<std::size_t>(ops[i])];
+        constexpr int kDigitBits = 16, kDigits = 64 / kDigitBits;
+        constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
+        std::vector<u32>& count = scratch_.histogram;
+        count.assign(kDigits * kBuckets, 0);
+        for (const u64 k : key)
+            for (int d = 0; d < kDigits; ++d) ++count[d * kBuckets + ((k >> (d * kDigitBits)) & (kBuckets - 1))];
+        for (int d = 0; d < kDigits; ++d) {
+            u32* c = count.data() + d * kBuckets;
+            if (n == 0 || c[(key[0] >> (d * kDigitBits)) & (kBuckets - 1)] == n) continue;
+            u32 sum = 0;
+            for (std::size_t b = 0; b < kBuckets; ++b) {
+                const u32 here = c[b];
+                c[b] = sum;
+                sum += here;
+            }
+            for (std::size_t i = 0; i < n; ++i) {
+                const u32 at = c[(key[i] >> (d * kDigitBits)) & (kBuckets - 1)]++;
+                key_spare[at] = key[i];
+                order_spare[at] = order[i];
+            }
+            key.swap(key_spare);
+            order.swap(order_spare);
+        }
+        for (std::size_t i = 0; i + 1 < n;) {
+            std::size_t j = i + 1;
+            while (j < n && key[j] == key[i]) ++j;
+            if (j - i > 1)
+                std::sort(order.begin() + static_cast<std::ptrdiff_t>(i), order.begin() + static_cast<std::ptrdiff_t>(j),
+                          [&](i32 a, i32 b) { return beats(a, b); });
+            i = j;
+        }
+    }
+
     const Surface& s_;
     const Fans& fans_;
     const Edges& edges_;
