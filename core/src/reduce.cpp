@@ -424,14 +424,14 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
 // Step 2: edges. Edge e joins v0[e] < v1[e]; f1[e] is the triangle that runs
 // v0 → v1, f2[e] the one that runs v1 → v0 (-1 on the border, at most one of
 // them), and c[e], d[e] are their third corners (-1 with them); v1 is
-// neighbour s0[e] of v0 and v0 is neighbour s1[e] of v1.
-// slot[off[v] + v + j] is the edge to neighbour j of v; tedge[3t + r] is the
-// edge from corner r to corner r + 1 of triangle t.
+// neighbour s0[e] of v0 and v0 is neighbour s1[e] of v1. Each edge is written
+// by its smaller end alone, which finds s1 through the triangle the two
+// share, so no per-slot edge table is built (every array here is written
+// once per round, and at 15 workers a round's traffic is what slows a task:
+// scripts/probe_contention.py).
 
 struct Edges {
     std::vector<i32> v0, v1, f1, f2, c, d, s0, s1;
-    std::vector<i32> slot, tedge;
-    std::vector<i32> opposite; // per fan slot: the edge of its triangle opposite v
     std::vector<i32> corner_slot; // build_edges's map from triangle corner 3t + r to fan slot
     i32 count() const { return static_cast<i32>(v0.size()); }
 };
@@ -452,8 +452,6 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
     const auto ne = static_cast<std::size_t>(eoff[static_cast<std::size_t>(nv)]);
     for (auto* a : {&edges.v0, &edges.v1, &edges.f1, &edges.f2, &edges.c, &edges.d, &edges.s0, &edges.s1})
         a->resize(ne);
-    edges.slot.resize(fans.face.size() + static_cast<std::size_t>(nv));
-    edges.tedge.resize(s.tri.size());
     // corner_slot[3t + r]: the fan slot of corner r of triangle t.
     std::vector<i32>& corner_slot = edges.corner_slot;
     corner_slot.resize(s.tri.size());
@@ -478,44 +476,20 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
             edges.f2[e] = before >= 0 ? fans.face[static_cast<std::size_t>(before)] : -1;
             edges.d[e] = before >= 0 ? fans.next[static_cast<std::size_t>(before)] : -1;
             edges.s0[e] = j;
-            edges.slot[static_cast<std::size_t>(o + v + j)] = static_cast<i32>(e);
-            ++e;
-        }
-    });
-    parallel_for(threads, nv, [&](i64 vi) {
-        const i32 v = static_cast<i32>(vi);
-        const i32 o = fans.off[static_cast<std::size_t>(v)], n = fans.nn(v);
-        const i32 k = fans.k(v);
-        for (i32 j = 0; j < n; ++j) {
-            const i32 u = fans.nbr(v, j);
-            if (u > v) continue;
             // Where v sits in u's ring, from the triangle they share: in the
             // slot of that triangle in u's fan, v is prev (j < k: the
             // triangle of v's slot j runs v, u, ...) or next (j == k, v's
             // extra border neighbour: the last triangle runs v, ..., u).
             const i32 vs = o + (j < k ? j : k - 1);
-            const i32 c = fans.corner[static_cast<std::size_t>(vs)];
+            const i32 corner = fans.corner[static_cast<std::size_t>(vs)];
             const i32 t = fans.face[static_cast<std::size_t>(vs)];
-            const i32 us = corner_slot[static_cast<std::size_t>(3 * t + (j < k ? (c + 1) % 3 : (c + 2) % 3))];
+            const i32 us = corner_slot[static_cast<std::size_t>(3 * t + (j < k ? (corner + 1) % 3 : (corner + 2) % 3))];
             const i32 ou = fans.off[static_cast<std::size_t>(u)], ku = fans.k(u);
             i32 i = us - ou;
             if (j < k) i = i + 1 < ku ? i + 1 : (fans.border[static_cast<std::size_t>(u)] ? ku : 0);
-            const i32 e = edges.slot[static_cast<std::size_t>(ou + u + i)];
-            edges.slot[static_cast<std::size_t>(o + v + j)] = e;
-            edges.s1[static_cast<std::size_t>(e)] = j;
+            edges.s1[e] = i;
+            ++e;
         }
-        // Triangle edges: each is written by its tail vertex only.
-        for (i32 j = 0, k = fans.k(v); j < k; ++j) {
-            const i32 t = fans.face[static_cast<std::size_t>(o + j)];
-            edges.tedge[static_cast<std::size_t>(3 * t + fans.corner[static_cast<std::size_t>(o + j)])] =
-                edges.slot[static_cast<std::size_t>(o + v + j)];
-        }
-    });
-    edges.opposite.resize(fans.face.size());
-    parallel_for(threads, static_cast<i64>(fans.face.size()), [&](i64 j) {
-        const auto slot = static_cast<std::size_t>(j);
-        const auto t = static_cast<std::size_t>(fans.face[slot]);
-        edges.opposite[slot] = edges.tedge[3 * t + (fans.corner[slot] + 1u) % 3u];
     });
 }
 
