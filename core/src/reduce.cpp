@@ -276,15 +276,19 @@ struct Fans {
     std::vector<i32> off, face, next, prev;
     std::vector<u8> corner;  // per slot: the corner (0..2) of v in its triangle
     std::vector<u8> border;
-    // Neighbours of v at ring[off[v] + v + j], j < nn(v): next of each slot,
-    // then, on the border, prev of the last slot.
-    std::vector<i32> ring;
     std::vector<u8> problem; // build_fans's per-vertex findings, kept for reuse
 
     i32 k(i32 v) const { return off[static_cast<std::size_t>(v) + 1] - off[static_cast<std::size_t>(v)]; }
     // Neighbours: k of them for an interior vertex, k + 1 on the border.
     i32 nn(i32 v) const { return k(v) + border[static_cast<std::size_t>(v)]; }
-    i32 nbr(i32 v, i32 j) const { return ring[static_cast<std::size_t>(off[static_cast<std::size_t>(v)] + v + j)]; }
+    // Neighbour j < nn(v): next of each slot, then, on the border, prev of
+    // the last slot (read from next/prev rather than a copy of them: one
+    // array less to write every round).
+    i32 nbr(i32 v, i32 j) const {
+        const i32 slot = off[static_cast<std::size_t>(v)] + j;
+        return slot < off[static_cast<std::size_t>(v) + 1] ? next[static_cast<std::size_t>(slot)]
+                                                           : prev[static_cast<std::size_t>(slot - 1)];
+    }
 };
 
 enum FanProblem : u8 { kFanOk = 0, kEdgeCount, kEdgeDirection, kVertexFans };
@@ -313,7 +317,6 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
     fans.next.resize(corner.size());
     fans.prev.resize(corner.size());
     fans.corner.resize(corner.size());
-    fans.ring.resize(corner.size() + static_cast<std::size_t>(nv));
     fans.border.assign(static_cast<std::size_t>(nv), 0);
 
     // Order each fan; record the first problem per vertex.
@@ -395,9 +398,7 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
             fans.next[slot] = a[order[step]];
             fans.prev[slot] = b[order[step]];
             fans.corner[slot] = static_cast<u8>(rc[order[step]]);
-            fans.ring[slot + static_cast<std::size_t>(v)] = a[order[step]];
         }
-        fans.ring[static_cast<std::size_t>(o + k + v)] = starts == 1 ? b[order[k - 1]] : -1;
         fans.border[static_cast<std::size_t>(v)] = starts == 1;
     });
     for (i32 v = 0; v < nv; ++v) {
