@@ -17,6 +17,7 @@ comparing the medians:
             not as P copies; per-step medians come from the reports.
 
     scripts/probe_contention.py --tetiso build/core/tetiso --cores 1-15 --out results/speedup/contention
+    scripts/probe_contention.py --probes domain --cores 1-15 --out /tmp/domain-only
 
 Writes OUT.json (every run's seconds, the domain reports' steps, the ratios)
 and prints one line per probe. Needs `taskset` (util-linux).
@@ -62,6 +63,7 @@ def main():
     ap.add_argument("--tetiso", default="build/core/tetiso")
     ap.add_argument("--cores", default="1-15", help="cores of the copies run at once (the lone run uses the first)")
     ap.add_argument("--repeat", type=int, default=3, help="lone runs; the copies run at once repeat max(1, REPEAT-1) times")
+    ap.add_argument("--probes", default="compute,small,domain", help="which probes to run, comma-separated")
     ap.add_argument("--out", required=True, help="OUT.json is written")
     args = ap.parse_args()
     cores = parse_cores(args.cores)
@@ -79,7 +81,12 @@ def main():
                                  "--threads", "1", "--report", f"{tmp}/d{i}.json"],
         }
         result = {"cores": cores, "tetiso": args.tetiso, "probes": {}}
-        for name, argv_for in probes.items():
+        wanted = args.probes.split(",")
+        unknown = [name for name in wanted if name not in probes]
+        if unknown:
+            sys.exit(f"probe_contention: unknown probe(s) {', '.join(unknown)}; known: {', '.join(probes)}")
+        for name in wanted:
+            argv_for = probes[name]
             entry = {"alone_s": [], "together_s": []}
             steps = {"alone": [], "together": []}
             for _ in range(args.repeat):
