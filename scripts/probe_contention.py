@@ -67,6 +67,10 @@ def main():
     ap.add_argument("--out", required=True, help="OUT.json is written")
     args = ap.parse_args()
     cores = parse_cores(args.cores)
+    wanted = args.probes.split(",")
+    unknown = [name for name in wanted if name not in ("compute", "small", "domain")]
+    if unknown:
+        sys.exit(f"probe_contention: unknown probe(s) {', '.join(unknown)}; known: compute, small, domain")
     tetiso = os.path.abspath(args.tetiso)
 
     with tempfile.TemporaryDirectory(prefix="tetiso-contention-") as tmp:
@@ -81,10 +85,6 @@ def main():
                                  "--threads", "1", "--report", f"{tmp}/d{i}.json"],
         }
         result = {"cores": cores, "tetiso": args.tetiso, "probes": {}}
-        wanted = args.probes.split(",")
-        unknown = [name for name in wanted if name not in probes]
-        if unknown:
-            sys.exit(f"probe_contention: unknown probe(s) {', '.join(unknown)}; known: {', '.join(probes)}")
         for name in wanted:
             argv_for = probes[name]
             entry = {"alone_s": [], "together_s": []}
