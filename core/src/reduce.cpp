@@ -330,16 +330,18 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
         const i32 k = fans.off[static_cast<std::size_t>(v) + 1] - o;
         if (k == 0) return;
         constexpr i32 kSmall = 48;
-        i32 tb[kSmall], ab[kSmall], bb[kSmall], ob[kSmall], rb[kSmall];
+        i32 tb[kSmall], ab[kSmall], bb[kSmall], ob[kSmall], rb[kSmall], sb[kSmall], pb[kSmall];
         std::vector<i32> heap;
-        i32 *t = tb, *a = ab, *b = bb, *order = ob, *rc = rb;
+        i32 *t = tb, *a = ab, *b = bb, *order = ob, *rc = rb, *succ = sb, *pred = pb;
         if (k > kSmall) {
-            heap.resize(static_cast<std::size_t>(5 * k));
+            heap.resize(static_cast<std::size_t>(7 * k));
             t = heap.data();
             a = t + k;
             b = a + k;
             order = b + k;
             rc = order + k;
+            succ = rc + k;
+            pred = succ + k;
         }
         for (i32 i = 0; i < k; ++i) {
             const i32 c = corner[static_cast<std::size_t>(o + i)];
@@ -367,16 +369,28 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
                 if (ca > 1 || cb > 1) return fail(kEdgeDirection, u, 2);
             }
         }
-        // A slot without predecessor starts a path (a border edge (v, a)).
-        i32 start = -1, starts = 0;
+        // succ[i]: the slot after slot i around v (its next is i's prev), -1
+        // at the end of a path; a slot that follows no other starts a path (a
+        // border edge (v, a)). Matches are unique in a valid fan (the check
+        // above, or the operations keeping the surface manifold), so the
+        // first one found is the one: one search per slot, where looking for
+        // predecessors and then for each step's successor took two.
+        for (i32 i = 0; i < k; ++i) pred[i] = 0;
         for (i32 i = 0; i < k; ++i) {
-            bool has_pred = false;
-            for (i32 j = 0; j < k && !has_pred; ++j) has_pred = b[j] == a[i];
-            if (!has_pred) {
+            succ[i] = -1;
+            for (i32 j = 0; j < k; ++j)
+                if (a[j] == b[i]) {
+                    succ[i] = j;
+                    pred[j] = 1;
+                    break;
+                }
+        }
+        i32 start = -1, starts = 0;
+        for (i32 i = 0; i < k; ++i)
+            if (!pred[i]) {
                 ++starts;
                 start = i;
             }
-        }
         if (starts > 1) return fail(kVertexFans, -1, 0);
         if (starts == 0) {
             start = 0;
@@ -385,10 +399,7 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
         }
         order[0] = start;
         for (i32 step = 1; step < k; ++step) {
-            const i32 want = b[order[step - 1]];
-            i32 found = -1;
-            for (i32 j = 0; j < k; ++j)
-                if (a[j] == want) found = j;
+            const i32 found = succ[order[step - 1]];
             if (found < 0 || found == start) return fail(kVertexFans, -1, 0);
             order[step] = found;
         }
