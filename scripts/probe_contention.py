@@ -25,6 +25,7 @@ and prints one line per probe. Needs `taskset` (util-linux).
 import argparse
 import json
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -53,6 +54,10 @@ def run_pinned(cores, argv_for):
             if ends[i] is None and p.poll() is not None:
                 ends[i] = time.perf_counter()
                 if p.returncode != 0:
+                    for other in procs:
+                        if other.poll() is None:
+                            other.kill()
+                            other.wait()
                     sys.exit(f"probe_contention: {' '.join(p.args)} failed: {p.stderr.read().decode().strip()}")
         time.sleep(0.002)
     return [e - s for s, e in zip(starts, ends)]
@@ -72,6 +77,10 @@ def main():
     if unknown:
         sys.exit(f"probe_contention: unknown probe(s) {', '.join(unknown)}; known: compute, small, domain")
     tetiso = os.path.abspath(args.tetiso)
+    if not os.access(tetiso, os.X_OK):
+        sys.exit(f"probe_contention: {args.tetiso} is not an executable tetiso (build it, or pass --tetiso)")
+    if shutil.which("taskset") is None:
+        sys.exit("probe_contention: taskset (util-linux) is needed to pin the copies to cores")
 
     with tempfile.TemporaryDirectory(prefix="tetiso-contention-") as tmp:
         for lattice in (24, 80):
