@@ -1344,12 +1344,7 @@ public:
                 if (!picked[static_cast<std::size_t>(ai)]) return;
                 const i32 e = A[static_cast<std::size_t>(ai)];
                 if (!chosen[static_cast<std::size_t>(e)]) return;
-                i32 vs[4];
-                const int n = touched(e, vs);
-                for (int i = 0; i < n; ++i) {
-                    claim(vs[i]);
-                    for (i32 j = 0, m = fans_.nn(vs[i]); j < m; ++j) claim(fans_.nbr(vs[i], j));
-                }
+                claim_around(e);
             });
             // What stays active: neither picked nor claimed. The test runs in
             // parallel and leaves its answer in picked[] (1: drop); the
@@ -1390,10 +1385,7 @@ private:
                 continue;
             }
             chosen[static_cast<std::size_t>(e)] = kChosenTested;
-            for (int i = 0; i < n; ++i) {
-                claim(vs[i]);
-                for (i32 j = 0, m = fans_.nn(vs[i]); j < m; ++j) claim(fans_.nbr(vs[i], j));
-            }
+            claim_around(e);
         }
     }
 
@@ -1463,6 +1455,15 @@ private:
     const Ops& ops_;
     void claim(i32 v) const {
         std::atomic_ref<i32>(scratch_.claimed[static_cast<std::size_t>(v)]).store(stamp_, std::memory_order_relaxed);
+    }
+    // Claims the closed 1-ring of every vertex chosen operation e touches.
+    void claim_around(i32 e) const {
+        i32 vs[4];
+        const int n = touched(e, vs);
+        for (int i = 0; i < n; ++i) {
+            claim(vs[i]);
+            for (i32 j = 0, m = fans_.nn(vs[i]); j < m; ++j) claim(fans_.nbr(vs[i], j));
+        }
     }
 
     SelectScratch& scratch_;

@@ -223,9 +223,10 @@ public:
 
     int most() const { return most_; }
 
-    // After the task: back to this worker's own cores and threads.
+    // After the task: back to this worker's own cores and threads (the
+    // OpenMP threads too: run_on moved them onto the lent cores).
     void give_back() {
-        if (known_ && lends_ > 0) sched_setaffinity(0, sizeof own_, &own_);
+        if (known_ && lends_ > 0) run_on(own_, per_worker_);
         cores_ = own_;
         lends_ = 0;
         most_ = per_worker_;
@@ -351,16 +352,19 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
             threads = std::max(1, threads) * ranks;
             run_on(job_cores, threads);
         }
+        auto back_home = [&] {
+            if (own_cores_known) run_on(own_cores, std::max(1, job.config().threads));
+        };
         try {
             pieces[static_cast<std::size_t>(task)] =
                 job.execute(task, &*pieces[static_cast<std::size_t>(n.left)],
                             &*pieces[static_cast<std::size_t>(n.right)], record, TaskThreads{threads, {}});
         } catch (const std::exception& e) {
-            if (own_cores_known) sched_setaffinity(0, sizeof own_cores, &own_cores);
+            back_home();
             fail(task, 0, dynamic_cast<const std::bad_alloc*>(&e) ? "out of memory" : e.what());
             return;
         }
-        if (own_cores_known) sched_setaffinity(0, sizeof own_cores, &own_cores);
+        back_home();
         pieces[static_cast<std::size_t>(n.left)].reset();
         pieces[static_cast<std::size_t>(n.right)].reset();
         record.rank = 0;
