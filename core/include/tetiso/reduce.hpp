@@ -82,7 +82,12 @@ struct ReduceOptions {
 
 struct ReduceRound {
     int round = 0;
-    std::size_t candidates = 0; // legal operations offered to the selection
+    // Operations offered to the selection: every possible collapse (its Φ
+    // still unknown) and every flip proposed.
+    std::size_t candidates = 0;
+    // Operations whose Φ and position (or flip) were computed: those the
+    // selection reached unblocked, plus the flips proposed.
+    std::size_t evaluated = 0;
     std::size_t collapses = 0;
     std::size_t flips = 0;
 };
