@@ -644,7 +644,7 @@ enum OpKind : u8 { kNone = 0, kCollapse = 1, kFlip = 2, kPending = 3, kQuiet = 4
 
 struct Ops {
     std::vector<u8> kind;
-    std::vector<u64> priority;
+    std::vector<u32> priority;
     std::vector<float> px, py, pz, err;
     std::vector<i32> survivor;
     void resize(std::size_t n) {
@@ -668,16 +668,20 @@ struct Params {
     bool flips;
 };
 
+// A priority is 32 bits: class, score, then a few bits of a hash that
+// varies with the round (equal priorities fall to the vertex keys, see
+// Selector::beats). 32 rather than 64 bits halve the radix sort's passes,
+// which streamed more memory per round than any other step.
 constexpr int kPriorityScoreBits = 22;
-constexpr int kPriorityHashBits = 40;
-constexpr u64 kClassFlip = 0, kClassCollapse = 1, kClassValence3 = 2, kClassShort = 3;
+constexpr int kPriorityHashBits = 8;
+constexpr u32 kClassFlip = 0, kClassCollapse = 1, kClassValence3 = 2, kClassShort = 3;
 
-u64 make_priority(u64 cls, double score, u64 hash) {
+u32 make_priority(u32 cls, double score, u64 hash) {
     score = std::clamp(score, 0.0, 1.0);
-    const u64 scale = (u64{1} << kPriorityScoreBits) - 1;
-    const u64 s = static_cast<u64>(score * static_cast<double>(scale));
+    const u32 scale = (u32{1} << kPriorityScoreBits) - 1;
+    const auto s = static_cast<u32>(score * static_cast<double>(scale));
     return (cls << (kPriorityScoreBits + kPriorityHashBits)) | (s << kPriorityHashBits) |
-           (hash & ((u64{1} << kPriorityHashBits) - 1));
+           static_cast<u32>(hash & ((u64{1} << kPriorityHashBits) - 1));
 }
 
 // The slots, in the fans of both ends, of the faces of an edge.
@@ -1255,7 +1259,7 @@ struct SelectScratch {
     std::vector<u8> mark, picked;
     std::vector<i32> claimed; // == the pass's stamp: within path length 1 of a chosen operation
     // The sequential choice's order (a radix sort by priority).
-    std::vector<u64> sort_key, sort_key_spare;
+    std::vector<u32> sort_key, sort_key_spare;
     std::vector<i32> order, order_spare;
     std::vector<u32> histogram;
 };
@@ -1268,7 +1272,7 @@ public:
     // True when operation a ranks above operation b (b may be -1).
     bool beats(i32 a, i32 b) const {
         if (b < 0) return true;
-        const u64 pa = ops_.priority[static_cast<std::size_t>(a)], pb = ops_.priority[static_cast<std::size_t>(b)];
+        const u32 pa = ops_.priority[static_cast<std::size_t>(a)], pb = ops_.priority[static_cast<std::size_t>(b)];
         if (pa != pb) return pa > pb;
         const EdgeKey a0 = s_.key[static_cast<std::size_t>(edges_.v0[static_cast<std::size_t>(a)])];
         const EdgeKey b0 = s_.key[static_cast<std::size_t>(edges_.v0[static_cast<std::size_t>(b)])];
@@ -1494,16 +1498,16 @@ private:
 
     // scratch_.order = ops, best first (beats() order): a stable LSD radix
     // sort of the complemented priorities, skipping the digits all share;
-    // equal priorities (rare: 40 of their bits are a hash) are then put in
-    // beats() order. Digits of 16 bits for large rounds; 8 for small ones,
-    // where clearing and scanning 4 x 65,536 counters cost more than the
-    // sort (5 % of a job's profile with 30^3-cell domains, whose late rounds
-    // have tens of operations).
+    // equal priorities are then put in beats() order. Digits of 16 bits for
+    // large rounds (two passes); 8 for small ones, where clearing and
+    // scanning 65,536-entry counters cost more than the sort (5 % of a job's
+    // profile with 30^3-cell domains, whose late rounds have tens of
+    // operations).
     void order_by_priority(const std::vector<i32>& ops) const {
         const std::size_t n = ops.size();
         if (n < (std::size_t{1} << 14)) radix_order<8>(ops);
         else radix_order<16>(ops);
-        const std::vector<u64>& key = scratch_.sort_key;
+        const std::vector<u32>& key = scratch_.sort_key;
         std::vector<i32>& order = scratch_.order;
         for (std::size_t i = 0; i + 1 < n;) {
             std::size_t j = i + 1;
@@ -1518,8 +1522,8 @@ private:
     template <int kDigitBits>
     void radix_order(const std::vector<i32>& ops) const {
         const std::size_t n = ops.size();
-        std::vector<u64>& key = scratch_.sort_key;
-        std::vector<u64>& key_spare = scratch_.sort_key_spare;
+        std::vector<u32>& key = scratch_.sort_key;
+        std::vector<u32>& key_spare = scratch_.sort_key_spare;
         std::vector<i32>& order = scratch_.order;
         std::vector<i32>& order_spare = scratch_.order_spare;
         key.resize(n);
@@ -1527,11 +1531,11 @@ private:
         order.assign(ops.begin(), ops.end());
         order_spare.resize(n);
         for (std::size_t i = 0; i < n; ++i) key[i] = ~ops_.priority[static_cast<std::size_t>(ops[i])];
-        constexpr int kDigits = 64 / kDigitBits;
+        constexpr int kDigits = 32 / kDigitBits;
         constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
         std::vector<u32>& count = scratch_.histogram;
         count.assign(kDigits * kBuckets, 0);
-        for (const u64 k : key)
+        for (const u32 k : key)
             for (int d = 0; d < kDigits; ++d) ++count[d * kBuckets + ((k >> (d * kDigitBits)) & (kBuckets - 1))];
         for (int d = 0; d < kDigits; ++d) {
             u32* c = count.data() + d * kBuckets;
