@@ -267,6 +267,26 @@ TEST(Reduce, MinimalComponentsStay) {
     expect_valid(ico, out, "icosahedron");
 }
 
+TEST(Reduce, PhiGatesEveryCollapseOutsideTheShortAndValenceThreeBranches) {
+    // Φ is computed only when the selection reaches an edge, after the edge
+    // was ranked. On an icosahedron the normals of adjacent faces are 41.8°
+    // apart, so no leaf is flatter than cos 41.8° = 0.745 < Φ* = 0.9; its
+    // edges are equally long (no short edge), its vertices have valence 5
+    // and its angles are 60° (no flip gains). The selection reaches edges
+    // and must drop them all, leaving the surface as it was.
+    const Piece ico = icosphere(0);
+    ReduceOptions o;
+    o.max_normal_turn_degrees = 89;
+    ReduceReport report;
+    const Piece out = reduce(ico, o, &report);
+    EXPECT_TRUE(tetiso::test::same_surface(ico, out));
+    ASSERT_FALSE(report.rounds.empty());
+    EXPECT_EQ(report.rounds[0].candidates, 30u); // every edge could collapse but for Φ
+    EXPECT_GT(report.rounds[0].evaluated, 0u);
+    EXPECT_EQ(report.rounds[0].collapses, 0u);
+    EXPECT_EQ(report.rounds[0].flips, 0u);
+}
+
 TEST(Reduce, FlatDiskCollapsesAndItsBorderStaysOnTheSquareWithItsCorners) {
     const Piece in = grid(40);
     ReduceReport report;
