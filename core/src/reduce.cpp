@@ -834,6 +834,16 @@ private:
         local = local_n ? local / local_n : 0.0;
     }
 
+    // A complete collapse: the survivor keep, moved to p.
+    static bool set_collapse(Ops& ops, std::size_t i, Vec p, i32 keep) {
+        ops.kind[i] = kCollapse;
+        ops.px[i] = static_cast<float>(p.x);
+        ops.py[i] = static_cast<float>(p.y);
+        ops.pz[i] = static_cast<float>(p.z);
+        ops.survivor[i] = keep;
+        return true;
+    }
+
     bool classify_collapse(const EdgeSlots& r, u64 hash, Ops& ops, std::size_t i) const {
         const i32 u = r.u, w = r.w;
         bool pin_u = false, pin_w = false;
@@ -846,14 +856,8 @@ private:
             i32 smallest = fans_.nbr(mover, 0);
             for (i32 j = 1; j < 3; ++j) smallest = std::min(smallest, fans_.nbr(mover, j));
             if (smallest != keep) continue;
-            const Vec p = s_.pos(keep);
-            ops.kind[i] = kCollapse;
             ops.priority[i] = make_priority(kClassValence3, 1.0, hash);
-            ops.px[i] = static_cast<float>(p.x);
-            ops.py[i] = static_cast<float>(p.y);
-            ops.pz[i] = static_cast<float>(p.z);
-            ops.survivor[i] = keep;
-            return true;
+            return set_collapse(ops, i, s_.pos(keep), keep);
         }
 
         double len, local;
@@ -935,12 +939,7 @@ private:
             ops.kind[i] = kNone;
             return false;
         }
-        ops.kind[i] = kCollapse;
-        ops.px[i] = static_cast<float>(p.x);
-        ops.py[i] = static_cast<float>(p.y);
-        ops.pz[i] = static_cast<float>(p.z);
-        ops.survivor[i] = keep;
-        return true;
+        return set_collapse(ops, i, p, keep);
     }
 
     bool legal_collapse(const EdgeSlots& r, Ops& ops, std::size_t i, std::vector<i32>* owner) const {
