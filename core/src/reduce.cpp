@@ -1450,7 +1450,8 @@ public:
     }
 
     // Whether no vertex operation e touches lies within path length 1 of an
-    // operation chosen so far (after claim_chosen()).
+    // operation claimed under the current stamp (in the sweep: chosen
+    // earlier in it; after claim_chosen(): chosen by select()).
     bool clear(i32 e) const {
         i32 vs[4];
         const int n = touched(e, vs);
@@ -1481,11 +1482,7 @@ private:
         order_by_priority(ops);
         ++stamp_;
         for (const i32 e : scratch_.order) {
-            i32 vs[4];
-            const int n = touched(e, vs);
-            bool clear = true;
-            for (int i = 0; i < n && clear; ++i) clear = scratch_.claimed[static_cast<std::size_t>(vs[i])] != stamp_;
-            if (!clear) continue;
+            if (!clear(e)) continue;
             if (!legal(e, true)) {
                 refused[static_cast<std::size_t>(e)] = 1;
                 continue;
@@ -1698,9 +1695,10 @@ void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, con
 // says that every edge v owns (v is their smaller end) was found to have no
 // possible operation (Φ not above Φ*, illegal, no flip); an edge blocked
 // before its answer was known keeps its owner from being quiet. An edge
-// whose owner is quiet and whose four vertices are unchanged is skipped. Once most of the surface is as reduced as the
-// criterion and the bounds allow, a round costs what the last one changed
-// rather than a full evaluation.
+// whose owner is quiet and whose four vertices are unchanged is skipped.
+// Once most of the surface is as reduced as the criterion and the bounds
+// allow, a round costs what the last one changed rather than a full
+// evaluation.
 bool unchanged(const Surface& s, const Edges& edges, const std::vector<u8>& changed, std::size_t e) {
     const i32 u = edges.v0[e], w = edges.v1[e];
     if (changed[static_cast<std::size_t>(u)] || changed[static_cast<std::size_t>(w)]) return false;
@@ -1867,9 +1865,9 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
             const i32 e = flip_list[static_cast<std::size_t>(fi)];
             if (!evaluator.propose_flip(e, ops)) refused[static_cast<std::size_t>(e)] = 1;
         });
-        std::size_t evaluated = flip_list.size(), flips_offered = 0;
+        std::size_t evaluated = flip_list.size();
         std::erase_if(flip_list, [&](i32 e) { return ops.kind[static_cast<std::size_t>(e)] != kFlip; });
-        flips_offered = flip_list.size();
+        const std::size_t flips_offered = flip_list.size();
         selector.choose_flips(flip_list, chosen);
         // Quiet: every edge the vertex owns is known to have no operation.
         std::fill(quiet.begin(), quiet.end(), u8{1});

@@ -85,8 +85,10 @@ struct ReduceRound {
     // Operations offered to the selection: every possible collapse (its Φ
     // still unknown) and every flip proposed.
     std::size_t candidates = 0;
-    // Operations whose Φ and position (or flip) were computed: those the
-    // selection reached unblocked, plus the flips proposed.
+    // Operations whose answer was computed: the collapses no longer pending
+    // at the end of the round (Φ and position computed when the selection
+    // reached them, or valence-3 collapses, complete when classified), plus
+    // the flips proposed.
     std::size_t evaluated = 0;
     std::size_t collapses = 0;
     std::size_t flips = 0;
