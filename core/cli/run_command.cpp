@@ -21,6 +21,11 @@ struct RunArguments {
 };
 
 nlohmann::json task_json(const TaskRecord& t) {
+    nlohmann::json stages;
+    if (t.kind == TaskKind::domain)
+        stages = {{"generate", t.stages.generate}, {"extract", t.stages.extract}, {"reduce", t.stages.reduce}};
+    else
+        stages = {{"seam", t.stages.seam}};
     return {{"task", t.task},
             {"kind", t.kind == TaskKind::domain ? "domain" : "seam"},
             {"first_domain", t.first_domain},
@@ -30,7 +35,8 @@ nlohmann::json task_json(const TaskRecord& t) {
             {"start", t.start},
             {"end", t.end},
             {"triangles_in", t.triangles_in},
-            {"triangles_out", t.triangles_out}};
+            {"triangles_out", t.triangles_out},
+            {"stage_seconds", stages}};
 }
 
 // Every rank of the job runs task after task of about the same shape, each

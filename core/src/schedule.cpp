@@ -37,11 +37,25 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
     record.first_domain = n.first;
     record.domain_count = n.count;
     record.threads = threads.count;
+    using clock = std::chrono::steady_clock;
+    auto t0 = clock::now();
+    auto lap = [&t0] {
+        const auto t1 = clock::now();
+        const double s = std::chrono::duration<double>(t1 - t0).count();
+        t0 = t1;
+        return s;
+    };
     if (n.count == 1) {
-        const Domain domain = decomposition_->make_domain(n.first, *field_);
-        Piece piece = extract(domain, level_, ExtractOptions{threads.count});
+        Piece piece;
+        {
+            const Domain domain = decomposition_->make_domain(n.first, *field_);
+            record.stages.generate = lap();
+            piece = extract(domain, level_, ExtractOptions{threads.count});
+        } // the tetrahedra go before the reduction needs its memory
+        record.stages.extract = lap();
         record.triangles_in = piece.triangle_count();
         if (config_.reduce) piece = reduce(piece, reduce_options(threads));
+        record.stages.reduce = lap();
         record.triangles_out = piece.triangle_count();
         return piece;
     }
@@ -54,6 +68,7 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
     Piece piece = seam(*left, *right,
                        [this](GlobalId a, GlobalId b) { return decomposition_->domains_of_edge(a, b); },
                        seam_options);
+    record.stages.seam = lap();
     record.triangles_out = piece.triangle_count();
     return piece;
 }

@@ -283,6 +283,7 @@ void work(const Job& job) {
             out.put<std::int32_t>(threads);
             out.put(record.triangles_in);
             out.put(record.triangles_out);
+            out.put(record.stages);
             out.reserve(Packer::piece_size(piece));
             out.put_piece(piece);
             send(out.bytes, 0, kResult);
@@ -464,6 +465,7 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
             const auto threads = in.get<std::int32_t>();
             record.triangles_in = in.get<std::uint64_t>();
             record.triangles_out = in.get<std::uint64_t>();
+            record.stages = in.get<TaskRecord::Stages>();
             const BisectionNode& n = job.node(record.task);
             record.kind = job.kind(record.task);
             record.first_domain = n.first;

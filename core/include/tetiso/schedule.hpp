@@ -60,6 +60,11 @@ struct TaskRecord {
     double start = 0, end = 0;       // seconds since the job started, on rank 0's clock
     std::uint64_t triangles_in = 0;  // extracted triangles, or the two pieces' sum
     std::uint64_t triangles_out = 0;
+    // Where a task's time went, on the rank that ran it: a domain's
+    // generation, extraction and reduction; a seam's merge and reduction.
+    struct Stages {
+        double generate = 0, extract = 0, reduce = 0, seam = 0;
+    } stages;
 };
 
 struct JobResult {
