@@ -57,7 +57,8 @@ else
     fail "failing task: status $status after ${elapsed}s: $(head -3 "$work/stderr")"
 fi
 
-# 4. The report holds one record per task, and the timeline plot is drawn.
+# 4. The report holds one record per task, with its seconds by stage, and the
+#    timeline plot is drawn.
 #    Rank 0 runs the root seam, only seams, and only while no other task runs
 #    (schedule_mpi.cpp), for any number of workers.
 for k in 2 3 4; do
@@ -70,6 +71,14 @@ assert r["ranks"] == k and len(tasks) == 2 * r["domains"] - 1, (r["ranks"], len(
 assert sum(t["kind"] == "domain" for t in tasks) == r["domains"]
 assert {t["rank"] for t in tasks} <= set(range(k))
 assert all(0 <= t["start"] <= t["end"] for t in tasks)
+# Each task's stage seconds come back with its result from the rank that
+# ran it: the stages of its kind, each measured inside the task's span.
+for t in tasks:
+    stages = t["stage_seconds"]
+    want = {"generate", "extract", "reduce"} if t["kind"] == "domain" else {"seam"}
+    assert set(stages) == want, t
+    assert all(v >= 0 for v in stages.values()), t
+    assert sum(stages.values()) <= t["end"] - t["start"] + 1e-3, t
 assert r["triangles"] < r["raw_triangles"]
 root = [t for t in tasks if t["domain_count"] == r["domains"]]
 assert len(root) == 1 and root[0]["rank"] == 0, root
