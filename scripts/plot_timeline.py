@@ -1,8 +1,11 @@
 #!/usr/bin/env python3
 """Draws the timeline of a `tetiso run --report` file: one row per rank, one
-bar per task (domain tasks and seams in two colours); a task that ran with
-more than one thread (cores lent by idle workers) is labelled with the most
-it had, e.g. "x4".
+bar per task. A domain task's bar is split into its stages (generation,
+extraction, reduction, from the report's stage_seconds; reports without
+them give one bar per task), seams are a colour of their own, and the legend
+gives each stage's total seconds over all tasks. A task that ran with more
+than one thread (cores lent by idle workers) is labelled with the most it
+had, e.g. "x4".
 
     scripts/plot_timeline.py report.json -o timeline.png
 """
@@ -24,14 +27,29 @@ def main():
     tasks = report["tasks"]
     ranks = sorted({t["rank"] for t in tasks})
     row = {rank: i for i, rank in enumerate(ranks)}
-    colours = {"domain": "tab:blue", "seam": "tab:orange"}
+    # A task's stages run back to back from its start; what is left of its
+    # span (receiving and unpacking its input, packing its result) stays
+    # blank.
+    colours = {"generate": "tab:green", "extract": "tab:olive", "reduce": "tab:blue", "seam": "tab:orange",
+               "domain": "tab:blue"}
+    totals = {}
 
     fig, ax = plt.subplots(figsize=(10, 1.0 + 0.35 * len(ranks)))
-    for kind in ("domain", "seam"):
-        bars = [(t["start"], t["end"] - t["start"], row[t["rank"]]) for t in tasks if t["kind"] == kind]
-        for start, width, y in bars:
-            ax.barh(y, width, left=start, height=0.8, color=colours[kind], edgecolor="black", linewidth=0.2)
-        ax.barh(-10, 0, color=colours[kind], label=f"{kind} ({len(bars)})")
+    for t in tasks:
+        y = row[t["rank"]]
+        ax.barh(y, t["end"] - t["start"], left=t["start"], height=0.8, color="white", edgecolor="black",
+                linewidth=0.2)
+        stages = t.get("stage_seconds") or {t["kind"]: t["end"] - t["start"]}
+        at = t["start"]
+        for stage in ("generate", "extract", "reduce", "seam", "domain"):
+            if stage not in stages:
+                continue
+            width = min(stages[stage], t["end"] - at)
+            ax.barh(y, width, left=at, height=0.8, color=colours[stage], linewidth=0)
+            totals[stage] = totals.get(stage, 0.0) + stages[stage]
+            at += width
+    for stage, total in totals.items():
+        ax.barh(-10, 0, color=colours[stage], label=f"{stage} ({total:.1f} s in all)")
     for t in tasks:
         if t.get("threads", 1) > 1 and t["kind"] == "domain":
             ax.text(t["end"], row[t["rank"]], f" x{t['threads']}", va="center", ha="left", fontsize=7)
