@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """Draws the timeline of a `tetiso run --report` file: one row per rank, one
-bar per task. A domain task's bar is split into its stages (generation,
-extraction, reduction, from the report's stage_seconds; reports without
-them give one bar per task), seams are a colour of their own, and the legend
-gives each stage's total seconds over all tasks. A task that ran with more
+bar per task. Each bar is split into its task's stages from the report's
+stage_seconds: a domain's generation, extraction and reduction; a seam's
+merge, region, reduction and splice, in colours of their own (reports
+without stages, or with a seam's single "seam" stage, give one bar per task
+or per seam). The legend gives each stage's total seconds over all tasks. A task that ran with more
 than one thread (cores lent by idle workers) is labelled with the most it
 had, e.g. "x4".
 
@@ -30,8 +31,16 @@ def main():
     # A task's stages run back to back from its start; what is left of its
     # span (receiving and unpacking its input, packing its result) stays
     # blank.
-    colours = {"generate": "tab:green", "extract": "tab:olive", "reduce": "tab:blue", "seam": "tab:orange",
-               "domain": "tab:blue"}
+    # (kind, stage) in the order they run; a seam's reduction is not a
+    # domain's, so it gets its own colour and legend entry.
+    stage_order = {
+        "domain": [("generate", "generate", "tab:green"), ("extract", "extract", "tab:olive"),
+                   ("reduce", "reduce", "tab:blue"), ("domain", "domain", "tab:blue")],
+        "seam": [("merge", "seam merge", "tab:orange"), ("region", "seam region", "tab:brown"),
+                 ("reduce", "seam reduce", "tab:red"), ("splice", "seam splice", "tab:pink"),
+                 ("seam", "seam", "tab:orange")],
+    }
+    colours = {}
     totals = {}
 
     fig, ax = plt.subplots(figsize=(10, 1.0 + 0.35 * len(ranks)))
@@ -41,15 +50,16 @@ def main():
                 linewidth=0.2)
         stages = t.get("stage_seconds") or {t["kind"]: t["end"] - t["start"]}
         at = t["start"]
-        for stage in ("generate", "extract", "reduce", "seam", "domain"):
+        for stage, label, colour in stage_order[t["kind"]]:
             if stage not in stages:
                 continue
             width = min(stages[stage], t["end"] - at)
-            ax.barh(y, width, left=at, height=0.8, color=colours[stage], linewidth=0)
-            totals[stage] = totals.get(stage, 0.0) + stages[stage]
+            ax.barh(y, width, left=at, height=0.8, color=colour, linewidth=0)
+            colours[label] = colour
+            totals[label] = totals.get(label, 0.0) + stages[stage]
             at += width
-    for stage, total in totals.items():
-        ax.barh(-10, 0, color=colours[stage], label=f"{stage} ({total:.1f} s in all)")
+    for label, total in totals.items():
+        ax.barh(-10, 0, color=colours[label], label=f"{label} ({total:.1f} s in all)")
     for t in tasks:
         if t.get("threads", 1) > 1 and t["kind"] == "domain":
             ax.text(t["end"], row[t["rank"]], f" x{t['threads']}", va="center", ha="left", fontsize=7)

@@ -25,7 +25,10 @@ nlohmann::json task_json(const TaskRecord& t) {
     if (t.kind == TaskKind::domain)
         stages = {{"generate", t.stages.generate}, {"extract", t.stages.extract}, {"reduce", t.stages.reduce}};
     else
-        stages = {{"seam", t.stages.seam}};
+        stages = {{"merge", t.stages.merge},
+                  {"region", t.stages.region},
+                  {"reduce", t.stages.reduce},
+                  {"splice", t.stages.splice}};
     return {{"task", t.task},
             {"kind", t.kind == TaskKind::domain ? "domain" : "seam"},
             {"first_domain", t.first_domain},

@@ -65,10 +65,14 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
     seam_options.reduce = config_.reduce;
     seam_options.reduce_options = reduce_options(threads);
     seam_options.rings = config_.seam_rings;
+    SeamReport seam_report;
     Piece piece = seam(*left, *right,
                        [this](GlobalId a, GlobalId b) { return decomposition_->domains_of_edge(a, b); },
-                       seam_options);
-    record.stages.seam = lap();
+                       seam_options, &seam_report);
+    record.stages.merge = seam_report.seconds.merge;
+    record.stages.region = seam_report.seconds.region;
+    record.stages.reduce = seam_report.seconds.reduce;
+    record.stages.splice = seam_report.seconds.splice;
     record.triangles_out = piece.triangle_count();
     return piece;
 }

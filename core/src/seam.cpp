@@ -4,12 +4,22 @@
 
 #include <algorithm>
 #include <bit>
+#include <chrono>
 #include <string>
 
 #include "tetiso/error.hpp"
 
 namespace tetiso {
 namespace {
+
+// Seconds since `since`, which moves to now: consecutive calls time
+// consecutive steps.
+double lap(std::chrono::steady_clock::time_point& since) {
+    const auto now = std::chrono::steady_clock::now();
+    const double seconds = std::chrono::duration<double>(now - since).count();
+    since = now;
+    return seconds;
+}
 
 bool same_position(const Piece& a, std::size_t i, const Piece& b, std::size_t j) {
     return std::bit_cast<std::uint32_t>(a.x[i]) == std::bit_cast<std::uint32_t>(b.x[j]) &&
@@ -170,6 +180,7 @@ std::vector<std::int32_t> pinched_vertices(const Piece& piece, const std::vector
 
 Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, const SeamOptions& options,
                   SeamReport* report) {
+    auto clock = std::chrono::steady_clock::now();
     const std::size_t n = piece.vertex_count();
     const Incidence around = incidence(piece);
 
@@ -249,12 +260,10 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
             sub.triangles.push_back(local[static_cast<std::size_t>(piece.triangles[3 * static_cast<std::size_t>(t) + static_cast<std::size_t>(k)])]);
     }
 
+    const double region_seconds = lap(clock);
     ReduceReport reduce_report;
     const Piece reduced = reduce(sub, options.reduce_options, &reduce_report);
-    if (report) {
-        report->region_triangles = region.size();
-        report->reduce = reduce_report;
-    }
+    const double reduce_seconds = lap(clock);
 
     // Splice: vertices of the sub-piece that the reduction removed are dropped,
     // those it kept take their new positions; both lists are in key order.
@@ -296,15 +305,27 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
     for (const std::int32_t v : reduced.triangles)
         out.triangles.push_back(renumber[static_cast<std::size_t>(from_reduced[static_cast<std::size_t>(v)])]);
     out.error.insert(out.error.end(), reduced.error.begin(), reduced.error.end());
+    if (report) {
+        report->region_triangles = region.size();
+        report->reduce = reduce_report;
+        report->seconds.region = region_seconds;
+        report->seconds.reduce = reduce_seconds;
+        report->seconds.splice = lap(clock);
+    }
     return out;
 }
 
 Piece seam(const Piece& a, const Piece& b, const EdgeDomains& domains_of_edge, const SeamOptions& options,
            SeamReport* report) {
+    auto clock = std::chrono::steady_clock::now();
     Piece merged = merge_by_key(a, b);
     std::vector<std::uint8_t> seed(merged.flags);
     const std::size_t unlocked = unlock_settled(merged, domains_of_edge);
-    if (report) *report = SeamReport{unlocked, 0, {}};
+    if (report) {
+        *report = SeamReport{};
+        report->vertices_unlocked = unlocked;
+        report->seconds.merge = lap(clock);
+    }
     if (!options.reduce || unlocked == 0) return merged;
     for (std::size_t v = 0; v < seed.size(); ++v)
         seed[v] = (seed[v] & kLocked) && !(merged.flags[v] & kLocked) ? 1 : 0;

@@ -75,7 +75,7 @@ assert all(0 <= t["start"] <= t["end"] for t in tasks)
 # ran it: the stages of its kind, each measured inside the task's span.
 for t in tasks:
     stages = t["stage_seconds"]
-    want = {"generate", "extract", "reduce"} if t["kind"] == "domain" else {"seam"}
+    want = {"generate", "extract", "reduce"} if t["kind"] == "domain" else {"merge", "region", "reduce", "splice"}
     assert set(stages) == want, t
     assert all(v >= 0 for v in stages.values()), t
     assert sum(stages.values()) <= t["end"] - t["start"] + 1e-3, t

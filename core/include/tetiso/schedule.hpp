@@ -61,9 +61,10 @@ struct TaskRecord {
     std::uint64_t triangles_in = 0;  // extracted triangles, or the two pieces' sum
     std::uint64_t triangles_out = 0;
     // Where a task's time went, on the rank that ran it: a domain's
-    // generation, extraction and reduction; a seam's merge and reduction.
+    // generation, extraction and reduction; a seam's merge by key, region
+    // near the seam, reduction and splice (SeamReport::Seconds).
     struct Stages {
-        double generate = 0, extract = 0, reduce = 0, seam = 0;
+        double generate = 0, extract = 0, reduce = 0, merge = 0, region = 0, splice = 0;
     } stages;
 };
 

@@ -41,6 +41,14 @@ struct SeamReport {
     std::size_t vertices_unlocked = 0;
     std::size_t region_triangles = 0; // triangles handed to the reduction
     ReduceReport reduce;
+    // Wall-clock seconds of each step: merging by key and unlocking what the
+    // merge settled; finding the region near the seam and copying it out;
+    // reducing it; splicing it back into the piece. The steps other than the
+    // reduction pass over the whole piece: they are what a seam costs beyond
+    // its neighbourhood.
+    struct Seconds {
+        double merge = 0, region = 0, reduce = 0, splice = 0;
+    } seconds;
 };
 
 // The seaming task of the paper: merge two pieces by key, unlock what the
