@@ -507,15 +507,24 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
 }
 
 // ---------------------------------------------------------------------------
-// Step 3: per-triangle unit normal (zero when the triangle is degenerate) and
-// quality (sine of its smallest angle), packed so one load brings both.
+// Step 3: per-triangle record of what a legality test reads of each face of
+// a leaf: unit normal (zero when the triangle is degenerate), quality (sine
+// of its smallest angle), error bound (a copy of Surface::err) and the range
+// of its error samples (Samples::sort fills it). One 32-byte record, so a
+// test's first touch of a face is one cache miss where separate arrays for
+// the geometry, the bounds and the sample offsets cost three (those loads
+// were the hot spots of the tests' profile).
 
 struct FaceGeometry {
     float nx, ny, nz, q;
+    float err;
+    i32 samples_begin, samples_end; // Samples::point[begin .. end)
+    i32 unused;
     Vec n() const { return {nx, ny, nz}; }
     // Below this quality a float normal is dominated by rounding.
     bool valid() const { return q > 1e-5f; }
 };
+static_assert(sizeof(FaceGeometry) == 32);
 
 void build_geometry(const Surface& s, int threads, std::vector<FaceGeometry>& geometry) {
     const i32 nt = s.triangles();
@@ -524,7 +533,8 @@ void build_geometry(const Surface& s, int threads, std::vector<FaceGeometry>& ge
         const auto t = static_cast<std::size_t>(ti);
         Vec n;
         const double q = quality(s.pos(s.tri[3 * t]), s.pos(s.tri[3 * t + 1]), s.pos(s.tri[3 * t + 2]), &n);
-        geometry[t] = {static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z), static_cast<float>(q)};
+        geometry[t] = {static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z), static_cast<float>(q),
+                       s.err[t], 0, 0, 0};
     });
 }
 
@@ -991,7 +1001,7 @@ private:
         for_each_leaf_face(r, [&](i32 slot, bool) {
             const i32 t = face(slot);
             const FaceGeometry& g = geo(t);
-            err_old = std::max(err_old, static_cast<double>(s_.err[static_cast<std::size_t>(t)]));
+            err_old = std::max(err_old, static_cast<double>(g.err));
             q_worst = std::min(q_worst, static_cast<double>(g.q));
             if (g.valid()) nsum = nsum + g.n();
         });
@@ -1106,7 +1116,8 @@ private:
         for_each_leaf_face(r, [&](i32 slot, bool removed) {
             const auto t = static_cast<std::size_t>(face(slot));
             const int own = removed ? -1 : replacement++;
-            for (i32 sample = samples_->off[t]; sample < samples_->off[t + 1] && placed; ++sample) {
+            const FaceGeometry& g = geo_[t];
+            for (i32 sample = g.samples_begin; sample < g.samples_end && placed; ++sample) {
                 const Samples::Point& sp = samples_->point[static_cast<std::size_t>(sample)];
                 const Vec q{sp.x, sp.y, sp.z};
                 const double base = sp.base;
@@ -1144,8 +1155,7 @@ private:
     bool place_flip_samples(const EdgeSlots& r, double& worst, const Visit& visit) const {
         const Vec pu = s_.pos(r.u), pw = s_.pos(r.w), pc = s_.pos(r.c), pd = s_.pos(r.d);
         for (const i32 t : {r.f1, r.f2})
-            for (i32 sample = samples_->off[static_cast<std::size_t>(t)];
-                 sample < samples_->off[static_cast<std::size_t>(t) + 1]; ++sample) {
+            for (i32 sample = geo(t).samples_begin; sample < geo(t).samples_end; ++sample) {
                 const Samples::Point& sp = samples_->point[static_cast<std::size_t>(sample)];
                 const Vec q{sp.x, sp.y, sp.z};
                 const double d1 = point_triangle_distance(q, pc, pu, pd), d2 = point_triangle_distance(q, pd, pw, pc);
@@ -1184,7 +1194,7 @@ private:
         const double axis_len = norm(axis);
         if (!(axis_len > 0)) return false;
         const double gap = std::abs(dot(pc - pu, axis)) / axis_len;
-        double err_new = std::max(s_.err[static_cast<std::size_t>(r.f1)], s_.err[static_cast<std::size_t>(r.f2)]) + gap;
+        double err_new = std::max(g1.err, g2.err) + gap;
         if (samples_) {
             err_new = 0.0;
             if (!place_flip_samples(r, err_new, [](i32, i32, double) {})) return false;
@@ -1260,6 +1270,7 @@ struct SelectScratch {
     // The sequential choice's order (a radix sort by priority).
     std::vector<u32> sort_key, sort_key_spare;
     std::vector<i32> order, order_spare;
+    std::vector<std::pair<i32, i32>> ends; // the sweep's operations' ends, in its order
     std::vector<u32> histogram;
 };
 
@@ -1449,6 +1460,12 @@ public:
         });
     }
 
+    // clear() for a collapse, whose ends are known.
+    bool clear_collapse(i32 u, i32 w) const {
+        return scratch_.claimed[static_cast<std::size_t>(u)] != stamp_ &&
+               scratch_.claimed[static_cast<std::size_t>(w)] != stamp_;
+    }
+
     // Whether no vertex operation e touches lies within path length 1 of an
     // operation claimed under the current stamp (in the sweep: chosen
     // earlier in it; after claim_chosen(): chosen by select()).
@@ -1476,13 +1493,33 @@ private:
     // taken when it is clear of those taken before and legal. ops holds no
     // operation within path length 1 of one chosen earlier in the round, so
     // finishing the passes' work this way gives what the passes would.
+    //
+    // The sweep visits the surface in random order, and most operations are
+    // dropped at the first look, clear() finding an end claimed: that look
+    // was a chain of two cache misses (the edge's ends, then their claims)
+    // that nothing could overlap. The ends are gathered first, in a loop
+    // whose loads are independent, and the claims are prefetched a few
+    // operations ahead.
     template <class Legal>
     void choose_in_order(const std::vector<i32>& ops, std::vector<u8>& chosen, std::vector<u8>& refused,
                          const Legal& legal) const {
         order_by_priority(ops);
         ++stamp_;
-        for (const i32 e : scratch_.order) {
-            if (!clear(e)) continue;
+        const std::vector<i32>& order = scratch_.order;
+        std::vector<std::pair<i32, i32>>& ends = scratch_.ends;
+        ends.resize(order.size());
+        for (std::size_t k = 0; k < order.size(); ++k) {
+            const auto e = static_cast<std::size_t>(order[k]);
+            ends[k] = {edges_.v0[e], edges_.v1[e]};
+        }
+        constexpr std::size_t kAhead = 16;
+        for (std::size_t k = 0; k < order.size(); ++k) {
+            if (k + kAhead < order.size()) {
+                __builtin_prefetch(&scratch_.claimed[static_cast<std::size_t>(ends[k + kAhead].first)]);
+                __builtin_prefetch(&scratch_.claimed[static_cast<std::size_t>(ends[k + kAhead].second)]);
+            }
+            const i32 e = order[k];
+            if (!clear_collapse(ends[k].first, ends[k].second)) continue;
             if (!legal(e, true)) {
                 refused[static_cast<std::size_t>(e)] = 1;
                 continue;
@@ -1823,7 +1860,14 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         const i32 ne = edges.count();
         ops.resize(static_cast<std::size_t>(ne));
         refused.assign(static_cast<std::size_t>(ne), 0);
-        if (samples.on()) samples.sort(s.triangles());
+        if (samples.on()) {
+            samples.sort(s.triangles());
+            parallel_for(threads, s.triangles(), [&](i64 t) {
+                FaceGeometry& g = geometry[static_cast<std::size_t>(t)];
+                g.samples_begin = samples.off[static_cast<std::size_t>(t)];
+                g.samples_end = samples.off[static_cast<std::size_t>(t) + 1];
+            });
+        }
         const Evaluator evaluator(s, fans, edges, geometry, samples.on() ? &samples : nullptr, params, round);
         parallel_for(threads, ne, [&](i64 ei) {
             const auto e = static_cast<std::size_t>(ei);
