@@ -66,6 +66,17 @@ int resolve_threads(int threads) {
     return threads < 1 ? 1 : threads;
 }
 
+// The most threads a round uses, whatever it is offered. A round is a
+// dozen short parallel loops with a join after each, and past eight threads
+// the joins cost more than the work they share: on the 16-core device,
+// gyroid surfaces of 29 K, 84 K, 193 K and 346 K triangles were each
+// reduced faster with 8 threads than with 16 (0.16 against 0.30 s, 0.30
+// against 0.53 s, 0.49 against 0.62 s, 0.87 against 0.94 s, medians of 3;
+// results/speedup/README.md, session 12). Capping the rounds, rather than
+// the vertices per thread, keeps the late rounds parallel: they are small
+// but their tests are the dearest, each face holding tens of samples.
+constexpr int kMaxRoundThreads = 8;
+
 // Below this many elements a loop runs on the calling thread: a fork and join
 // costs more than the work, and far more on an oversubscribed machine.
 constexpr i64 kParallelMin = 16384;
@@ -1799,7 +1810,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     const auto start_time = std::chrono::steady_clock::now();
     check_options(options);
     check_input(in);
-    int threads = resolve_threads(options.threads);
+    int available = resolve_threads(options.threads);
     const Params params{options.phi,
                         std::sin(options.min_angle_degrees * kPi / 180.0),
                         std::cos(options.max_normal_turn_degrees * kPi / 180.0),
@@ -1845,7 +1856,8 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     // misoriented input before anything is changed.
     for (int round = 0;; ++round) {
         if (options.more_threads)
-            if (const int offered = options.more_threads(); offered > 0) threads = offered;
+            if (const int offered = options.more_threads(); offered > 0) available = offered;
+        const int threads = std::min(available, kMaxRoundThreads);
         auto t0 = now();
         build_fans(s, threads, round == 0, fans, scratch_a, scratch_b);
         st.fans += since(t0);
