@@ -75,7 +75,8 @@ python3 "$root/scripts/bench_report_common.py" meta "$out/meta.json" \
   "commit=$commit" \
   "libraries=$libraries" \
   "load_before=$load_before" "load_after=$load_after" \
-  "environment=$(bench_environment)"
+  "environment=$(bench_environment)" \
+  "compile_options=$(sed -n 's/^add_compile_options(\(.*\))$/\1/p' "$source_dir/CMakeLists.txt")"
 
 python3 "$root/scripts/report_reduce.py" "$out"
 echo "wrote $out/README.md"

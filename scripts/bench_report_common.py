@@ -70,7 +70,8 @@ def machine_lines(meta, context):
                   f"- Machine: {meta['cpu_model']}, {meta['cpus']} CPUs available "
                   f"({meta['cores_per_socket']} cores per socket, {meta['threads_per_core']} thread(s) per core), "
                   f"{meta['memory']}, {meta['kernel']}",
-                  f"- Compiler: {meta['compiler']}, Release (-O3), `-ffp-contract=off`"]
+                  f"- Compiler: {meta['compiler']}, Release (-O3), "
+                  f"`{meta.get('compile_options', '-ffp-contract=off')}`"]
         if meta.get("libraries"):
             lines.append(f"- Libraries: {meta['libraries']}")
         lines += [f"- Environment: `{meta.get('environment', '')}`",
