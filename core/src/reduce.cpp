@@ -521,7 +521,8 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
 // Step 3: per-triangle record of what a legality test reads of each face of
 // a leaf: unit normal (zero when the triangle is degenerate), quality (sine
 // of its smallest angle), error bound (a copy of Surface::err) and the range
-// of its error samples (Samples::sort fills it). One 32-byte record, so a
+// of its error samples (copied from Samples::off once the round's sort has
+// placed them). One 32-byte record, so a
 // test's first touch of a face is one cache miss where separate arrays for
 // the geometry, the bounds and the sample offsets cost three (those loads
 // were the hot spots of the tests' profile).
