@@ -217,7 +217,8 @@ struct Samples {
         float x, y, z, base;
     };
     // Kept in the order of their owners, so the samples of triangle t are
-    // point[off[t] .. off[t+1]) and a test reads them as one run rather than
+    // one run of point[] (its FaceGeometry's samples_begin .. samples_end,
+    // which sort() writes) and a test reads them as one run rather than
     // one cache miss each (the loads of scattered samples were 4-5 % of a
     // profile of the paper surface's reduction; the selection step went from
     // 4.96 to 4.6 s with this order).
@@ -225,7 +226,6 @@ struct Samples {
     // changes only owner[], which the positions stay in step with.
     std::vector<Point> point;
     std::vector<i32> owner; // triangle, per point
-    std::vector<i32> off;
     bool enabled = false;
 
     bool on() const { return enabled; }
@@ -251,12 +251,20 @@ struct Samples {
         enabled = true;
     }
 
-    // Stable counting sort by owner.
-    void sort(i32 triangles) {
-        off.assign(static_cast<std::size_t>(triangles) + 1, 0);
-        for (const i32 t : owner) ++off[static_cast<std::size_t>(t) + 1];
-        for (std::size_t t = 0; t < static_cast<std::size_t>(triangles); ++t) off[t + 1] += off[t];
-        fill_.assign(off.begin(), off.end() - 1);
+    // Stable counting sort by owner; each face's range goes straight into
+    // its record (faces: the round's FaceGeometry, one per triangle).
+    template <class Faces>
+    void sort(Faces& faces) {
+        fill_.assign(faces.size(), 0);
+        for (const i32 t : owner) ++fill_[static_cast<std::size_t>(t)];
+        i32 begin = 0;
+        for (std::size_t t = 0; t < faces.size(); ++t) {
+            const i32 count = fill_[t];
+            faces[t].samples_begin = begin;
+            faces[t].samples_end = begin + count;
+            fill_[t] = begin;
+            begin += count;
+        }
         sorted_point_.resize(point.size());
         sorted_owner_.resize(owner.size());
         for (std::size_t i = 0; i < owner.size(); ++i) {
@@ -521,8 +529,8 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
 // Step 3: per-triangle record of what a legality test reads of each face of
 // a leaf: unit normal (zero when the triangle is degenerate), quality (sine
 // of its smallest angle), error bound (a copy of Surface::err) and the range
-// of its error samples (copied from Samples::off once the round's sort has
-// placed them). One 32-byte record, so a
+// of its error samples (written by the round's Samples::sort). One 32-byte
+// record, so a
 // test's first touch of a face is one cache miss where separate arrays for
 // the geometry, the bounds and the sample offsets cost three (those loads
 // were the hot spots of the tests' profile).
@@ -1873,14 +1881,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         const i32 ne = edges.count();
         ops.resize(static_cast<std::size_t>(ne));
         refused.assign(static_cast<std::size_t>(ne), 0);
-        if (samples.on()) {
-            samples.sort(s.triangles());
-            parallel_for(threads, s.triangles(), [&](i64 t) {
-                FaceGeometry& g = geometry[static_cast<std::size_t>(t)];
-                g.samples_begin = samples.off[static_cast<std::size_t>(t)];
-                g.samples_end = samples.off[static_cast<std::size_t>(t) + 1];
-            });
-        }
+        if (samples.on()) samples.sort(geometry);
         const Evaluator evaluator(s, fans, edges, geometry, samples.on() ? &samples : nullptr, params, round);
         parallel_for(threads, ne, [&](i64 ei) {
             const auto e = static_cast<std::size_t>(ei);
