@@ -1,7 +1,10 @@
 // Reduction speed and quality: tetiso's Φ-driven parallel edge collapse and
-// flip against meshoptimizer's meshopt_simplify (serial quadric edge
-// collapse), in one process, on the same surface and to the same triangle
-// count.
+// flip against three serial quadric edge-collapse simplifiers, in one
+// process, on the same surface and to the same triangle count:
+// meshoptimizer's meshopt_simplify (the fast one, which does not keep
+// topology) and, where this build has them, CGAL's edge_collapse with
+// Garland–Heckbert plane quadrics and OpenMesh's DecimaterT with ModQuadricT
+// (the careful ones, which do).
 //
 // The surface is the paper's: every domain of the N x N x N lattice with D = 1,
 // the "paper" field at its default level, extracted and merged by key as
@@ -11,9 +14,13 @@
 //   reduce/tetiso/N:<N>/threads:<T>  the same, every hardware thread
 //   reduce/meshopt/N:<N>/threads:1   meshopt_simplify to tetiso's triangle
 //                                    count, error unbounded (target_error 1)
-// Only the simplification call is timed; for meshoptimizer that includes the
-// adapter's copy into interleaved positions and its compaction back to a
-// Piece, as tetiso's time includes its input checks and compaction.
+//   reduce/cgal/N:<N>/threads:1      CGAL, to the same count
+//   reduce/openmesh/N:<N>/threads:1  OpenMesh, to the same count
+// Only the simplification call is timed; for a baseline that includes its
+// adapter's copy into the library's mesh and back to a Piece, as tetiso's
+// time includes its input checks and compaction. The careful baselines take
+// tens of seconds at N = 100, so they run --slow_repetitions times (default
+// 3) rather than the --benchmark_repetitions of the others.
 //
 // Quality is measured once per case, outside the timed loop, on the case's
 // own output, and reported as counters (their median is the value itself):
@@ -34,6 +41,9 @@
 #include <benchmark/benchmark.h>
 
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <map>
 #include <optional>
 #include <string>
@@ -190,11 +200,38 @@ void bench_meshopt(benchmark::State& state, std::int64_t n) {
     state.counters["meshopt_error"] = error;
 }
 
+// A careful baseline: name, and its adapter from reference.hpp.
+void bench_careful(benchmark::State& state, std::int64_t n, const std::string& name,
+                   tetiso::Piece (*simplify)(const tetiso::Piece&, std::size_t)) {
+    Problem& p = problems().at(n);
+    tetiso::Piece out;
+    for (auto _ : state) {
+        out = simplify(p.raw, p.tetiso_triangles);
+        benchmark::DoNotOptimize(out.triangles.data());
+    }
+    set_counters(state, p, quality(p, name, out));
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     using namespace tetiso_bench;
-    const std::vector<std::int64_t> sizes = initialize("bench_reduce", argc, argv, {100});
+    // Taken out before Google Benchmark sees the flags.
+    int slow_repetitions = 3;
+    std::vector<char*> rest{argv[0]};
+    for (int i = 1; i < argc; ++i) {
+        if (std::strncmp(argv[i], "--slow_repetitions=", 19) == 0) {
+            slow_repetitions = std::atoi(argv[i] + 19);
+            if (slow_repetitions < 1) {
+                std::fprintf(stderr, "bench_reduce: bad %s\n", argv[i]);
+                return 2;
+            }
+        } else {
+            rest.push_back(argv[i]);
+        }
+    }
+    int rest_count = static_cast<int>(rest.size());
+    const std::vector<std::int64_t> sizes = initialize("bench_reduce", rest_count, rest.data(), {100});
 
     const auto field = tetiso::make_field(kField);
     const tetiso::ReduceOptions defaults;
@@ -211,6 +248,16 @@ int main(int argc, char** argv) {
             register_timed(case_name("reduce/tetiso", n, threads), bench_tetiso, n, threads);
         // meshoptimizer is serial: one case, named like the others.
         register_timed(case_name("reduce/meshopt", n, 1), bench_meshopt, n);
+#ifdef TETISO_HAVE_CGAL_SIMPLIFY
+        register_timed(case_name("reduce/cgal", n, 1), bench_careful, n, std::string("cgal"),
+                       &tetiso::reference::cgal_simplify)
+            ->Repetitions(slow_repetitions);
+#endif
+#ifdef TETISO_HAVE_OPENMESH
+        register_timed(case_name("reduce/openmesh", n, 1), bench_careful, n, std::string("openmesh"),
+                       &tetiso::reference::openmesh_decimate)
+            ->Repetitions(slow_repetitions);
+#endif
     }
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();

@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Builds the reduction benchmark (Release) and regenerates results/reduce/:
 #   bench_reduce.json  Google Benchmark output: tetiso's reduce (1 and all
-#                      threads) and meshoptimizer's meshopt_simplify to the
-#                      same triangle count on the N=100 paper surface,
-#                      aggregates of several repetitions, quality counters
+#                      threads) and, to the same triangle count on the N=100
+#                      paper surface, meshoptimizer's meshopt_simplify, CGAL's
+#                      edge_collapse and OpenMesh's Decimater (the last two
+#                      where the build has them, 3 runs each), aggregates of
+#                      several repetitions, quality counters
 #   meta.json          command, machine, commit
 #   README.md          the report, by scripts/report_reduce.py
 #
@@ -18,7 +20,7 @@
 #   REPETITIONS (default 10), SIZES (default 100), OMP_WAIT_POLICY (default
 #   passive: see bench_extract.sh for why).
 # Repetitions of all cases run interleaved in random order, so that other load
-# on a shared machine falls on tetiso and meshoptimizer alike.
+# on a shared machine falls on tetiso and the baselines alike.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -66,7 +68,7 @@ cmake --build "$build_dir" -j "$jobs" --target bench_reduce ||
   { echo "bench_reduce.sh: bench_reduce was not built (are Google Benchmark and meshoptimizer installed?)" >&2; exit 1; }
 bench_run bench_reduce
 
-libraries=$(dpkg-query -W -f='${Package} ${Version}\n' libmeshoptimizer-dev libcgal-dev libbenchmark-dev 2>/dev/null |
+libraries=$(dpkg-query -W -f='${Package} ${Version}\n' libmeshoptimizer-dev libcgal-dev libeigen3-dev libopenmesh-dev libbenchmark-dev 2>/dev/null |
   paste -sd, | sed 's/,/, /g' || true)
 python3 "$root/scripts/bench_report_common.py" meta "$out/meta.json" \
   "script_cmd=$(bench_script_cmd)" \

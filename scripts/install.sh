@@ -9,9 +9,13 @@ packages=(
   libmuparser-dev libcli11-dev nlohmann-json3-dev    # core: expressions, CLI, reports
   libopenmpi-dev openmpi-bin                         # the MPI job
   libgtest-dev libgmock-dev libbenchmark-dev         # tests and benchmarks
-  libcgal-dev libmeshoptimizer-dev                   # checker's self-intersections, reduction baseline
+  libcgal-dev libeigen3-dev                          # checker's self-intersections; CGAL's simplifier baseline
+  libmeshoptimizer-dev                               # reduction baseline
   tetgen                                             # meshes/make_meshes.sh
 )
+# Optional baselines, built and tested only where installed (their tests are
+# the `reference` label): libvtk9-dev (extraction) and libopenmesh-dev
+# (reduction); both pull in a graphics stack that the suite does not need.
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing+=("$p")

@@ -17,9 +17,13 @@ TARGET_N = 100           # the lattice the targets below are stated for
 TARGET_REDUCTION = 10.0  # raw triangles over tetiso's, paper field, default Φ*
 TARGET_SPEED = 1.0       # tetiso single-thread input rate over meshoptimizer's, same triangle count
 
-NAME = r"^reduce/(?P<method>tetiso|meshopt)/N:(?P<n>\d+)/threads:(?P<threads>\d+)(/real_time)?$"
-METHOD_ORDER = {"tetiso": 0, "meshopt": 1}
-METHOD_TITLE = {"tetiso": "tetiso reduce", "meshopt": "meshopt_simplify"}
+# Cases with their own repetition count carry "/repeats:K" in their names.
+NAME = (r"^reduce/(?P<method>tetiso|meshopt|cgal|openmesh)/N:(?P<n>\d+)/threads:(?P<threads>\d+)"
+        r"(/repeats:\d+)?(/real_time)?$")
+METHOD_ORDER = {"tetiso": 0, "meshopt": 1, "cgal": 2, "openmesh": 3}
+METHOD_TITLE = {"tetiso": "tetiso reduce", "meshopt": "meshopt_simplify",
+                "cgal": "CGAL edge_collapse (Garland–Heckbert)", "openmesh": "OpenMesh Decimater (quadric)"}
+CAREFUL = ("cgal", "openmesh")  # the baselines that keep topology
 
 
 def load_cases(path):
@@ -32,6 +36,7 @@ def load_cases(path):
         case["seconds"] = aggregate["time_ms"] / 1e3
         case["min_seconds"] = aggregate.get("min_ms", float("nan")) / 1e3
         case["cv"] = aggregate.get("cv")
+        case["repetitions"] = row.get("repetitions")
         # Input rate from the median time, so that the table's seconds and
         # rates agree (a median of rates need not be the rate of the median).
         case["rate"] = row["triangles_in"] / case["seconds"]
@@ -61,7 +66,7 @@ def figures_section(cases, n):
     for key in ordered(cases, n):
         method, _, threads = key
         c = cases[key]
-        rows.append([METHOD_TITLE[method], threads, f"{int(c['triangles_in']):,}", f"{int(c['triangles_out']):,}",
+        rows.append([METHOD_TITLE[method], threads, c["repetitions"] or "—", f"{int(c['triangles_in']):,}", f"{int(c['triangles_out']):,}",
                      f"{c['triangles_in'] / c['triangles_out']:.2f}×", f"**{c['seconds']:.3f}**",
                      f"{c['min_seconds']:.3f}", f"{100 * c['cv']:.1f} %" if c["cv"] is not None else "—",
                      f"**{c['rate'] / 1e6:.2f}**", f"{c['hausdorff']:.5f}", f"{c['hausdorff_h']:.3f}",
@@ -69,7 +74,7 @@ def figures_section(cases, n):
                      f"{int(c['non_manifold_edges'])} / {int(c['non_manifold_vertices'])}",
                      f"{int(c['misoriented_edges'])}",
                      f"{int(c['degenerate_triangles'])} / {int(c['near_degenerate_triangles'])}", crossings(c)])
-    header = ["method", "threads", "triangles in", "triangles out", "ratio", "median s", "fastest s", "cv",
+    header = ["method", "threads", "runs", "triangles in", "triangles out", "ratio", "median s", "fastest s", "cv",
               "Mtris/s input", "Hausdorff", "Hausdorff / h", "same topology", "non-manifold edges / vertices",
               "misoriented edges", "degenerate / near-degenerate", "self-intersections"]
     return [table(header, rows), ""]
@@ -114,6 +119,16 @@ def targets_section(cases, n):
         else:
             lines.append("- **Zero self-intersections**: not assessed, the count was not measured "
                          "(no CGAL in this build, or an output CGAL cannot take).")
+    for method in CAREFUL:
+        c = cases.get((method, n, 1))
+        if not (c and t1):
+            continue
+        against_meshopt = f", {c['rate'] / mo['rate']:.3f}× meshoptimizer's rate" if mo else ""
+        lines.append(f"- {METHOD_TITLE[method]}, for comparison: {c['seconds']:.3f} s "
+                     f"({c['rate'] / 1e6:.2f} M input triangles/s{against_meshopt}); tetiso single-thread is "
+                     f"**{c['seconds'] / t1['seconds']:.2f}× as fast**. Topology "
+                     f"{'kept' if topology_kept(c) else '**not kept**'}, self-intersections {crossings(c)}, "
+                     f"Hausdorff {c['hausdorff_h']:.3f} h (tetiso's {t1['hausdorff_h']:.3f} h).")
     if mo:
         kept = topology_kept(mo)
         lines.append(f"- meshoptimizer, for comparison: topology {'kept' if kept else '**not kept**'} "
@@ -139,6 +154,14 @@ def sanity_section(cases, n):
         out = int(mo["triangles_out"])
         relation = "exactly that count" if out == target else f"{out:,}, {target - out:,} fewer"
         lines.append(f"meshopt_simplify was asked for at most {target:,} triangles and produced {relation}.")
+    for method in CAREFUL:
+        c = cases.get((method, n, 1))
+        if c and tetiso_out:
+            target = max(tetiso_out)
+            out = int(c["triangles_out"])
+            relation = "exactly that count" if out == target else f"{out:,}, {target - out:,} fewer"
+            lines.append(f"{METHOD_TITLE[method]} was asked for at most {target:,} triangles and produced "
+                         f"{relation}.")
     lines.append("")
     return lines
 
@@ -163,7 +186,7 @@ def main():
     meta = json.loads((directory / "meta.json").read_text()) if (directory / "meta.json").exists() else {}
     sizes = sorted({n for (_, n, _) in cases})
 
-    out = ["# Reduction: tetiso vs meshoptimizer", ""]
+    out = ["# Reduction: tetiso vs meshoptimizer, CGAL and OpenMesh", ""]
     out += ["The paper's test surface: the N×N×N lattice on [0,5]³ as one domain (D = 1), field "
             "2cos(10x)+2sin(10y)+cos(10z) at its default level "
             f"{float(context.get('level', 0.5)):g}, extracted by marching tetrahedra and merged by key as "
@@ -188,7 +211,7 @@ def main():
         out += targets_section(cases, n)
         out += sanity_section(cases, n)
 
-    out += ["## How the two were run", "",
+    out += ["## How they were run", "",
             "- tetiso: `tetiso::reduce(raw, options)` with `ReduceOptions{}` except `max_error` = "
             "`JobConfig{}.max_error_spacings` × h and `threads`; the call includes its input checks and the "
             "final compaction.",
@@ -196,6 +219,16 @@ def main():
             "triangle count, error unbounded so that it stops at the count, borders not locked (the surface "
             "is open at the cube's faces). The call includes the adapter's copy into interleaved positions and "
             "32-bit indices and its compaction back to a Piece; meshoptimizer itself is serial.",
+            "- CGAL: `tetiso::reference::cgal_simplify(raw, T)`: a `CGAL::Surface_mesh` (double coordinates) "
+            "built from the piece, `Surface_mesh_simplification::edge_collapse` with "
+            "`GarlandHeckbert_plane_policies` (quadric cost, the quadric's optimal position for the survivor), "
+            "stopped once the mesh has at most T faces, and the survivors copied back.",
+            "- OpenMesh: `tetiso::reference::openmesh_decimate(raw, T)`: a `TriMesh_ArrayKernelT` built from "
+            "the piece, `DecimaterT` with `ModQuadricT` (error unbounded), `decimate_to_faces(0, T)`, and the "
+            "survivors copied back. Its collapses are halfedge collapses: survivors keep their positions.",
+            "- Both careful baselines include building their halfedge mesh and copying back in the timed call, "
+            "as meshoptimizer's includes its adapter; they take tens of seconds per run, so they run fewer "
+            "repetitions (the table's runs).",
             "- Each timed iteration frees the previous output. Building the surface, the checks and one "
             "untimed tetiso reduction that fixes T happen before timing.",
             "- Self-intersections: `tetiso::count_self_intersections` (CGAL Polygon Mesh Processing); it "

@@ -20,4 +20,20 @@ bool has_meshoptimizer() {
 #endif
 }
 
+bool has_cgal_simplify() {
+#ifdef TETISO_HAVE_CGAL_SIMPLIFY
+    return true;
+#else
+    return false;
+#endif
+}
+
+bool has_openmesh() {
+#ifdef TETISO_HAVE_OPENMESH
+    return true;
+#else
+    return false;
+#endif
+}
+
 } // namespace tetiso::reference

@@ -4,12 +4,18 @@
 //   VTK            vtkContour3DLinearGrid with point merging: the production
 //                  marching-tetrahedra filter that extraction must beat;
 //   meshoptimizer  meshopt_simplify: a serial quadric edge-collapse simplifier,
-//                  the yardstick for reduction.
+//                  the yardstick for reduction's speed (it does not keep
+//                  topology);
+//   CGAL           Surface_mesh_simplification::edge_collapse with
+//                  Garland–Heckbert plane quadrics, and
+//   OpenMesh       DecimaterT with its quadric module: the careful serial
+//                  simplifiers, which keep topology (link condition), the
+//                  yardstick for what that guarantee usually costs.
 //
 // Each baseline is compiled only where its library was found at configure
-// time; TETISO_HAVE_VTK and TETISO_HAVE_MESHOPTIMIZER (set on every target
-// that links tetiso_reference) say which are here, and the has_*() functions
-// say the same at run time.
+// time; TETISO_HAVE_VTK, TETISO_HAVE_MESHOPTIMIZER, TETISO_HAVE_CGAL_SIMPLIFY
+// and TETISO_HAVE_OPENMESH (set on every target that links tetiso_reference)
+// say which are here, and the has_*() functions say the same at run time.
 #pragma once
 
 #include <cstddef>
@@ -23,6 +29,8 @@ namespace tetiso::reference {
 
 bool has_vtk();
 bool has_meshoptimizer();
+bool has_cgal_simplify();
+bool has_openmesh();
 
 #ifdef TETISO_HAVE_VTK
 
@@ -93,5 +101,31 @@ Piece meshopt_simplify(const Piece& piece, std::size_t target_triangles, float t
                        bool lock_border = false, float* result_error = nullptr);
 
 #endif // TETISO_HAVE_MESHOPTIMIZER
+
+// The careful baselines below take the piece as a halfedge mesh, so they
+// throw tetiso::Error, naming the triangle, for a non-manifold piece (and for
+// arrays of mismatched length or a triangle that refers to a vertex that does
+// not exist). Both simplify to at most `target_triangles` triangles, with the
+// error unbounded, borders free to move along themselves, and locked flags not
+// honoured (neither library can express them without a per-collapse callback,
+// which would no longer be the baseline as shipped). The result keeps the
+// surviving vertices in input order with their keys and flags, so the Piece
+// invariant holds, and the piece's domains.
+
+#ifdef TETISO_HAVE_CGAL_SIMPLIFY
+
+// CGAL's edge_collapse with GarlandHeckbert_plane_policies: quadric cost and
+// the quadric's optimal position for the survivor (so survivors move).
+Piece cgal_simplify(const Piece& piece, std::size_t target_triangles);
+
+#endif // TETISO_HAVE_CGAL_SIMPLIFY
+
+#ifdef TETISO_HAVE_OPENMESH
+
+// OpenMesh's DecimaterT with ModQuadricT: quadric cost, halfedge collapses
+// (survivors keep their positions).
+Piece openmesh_decimate(const Piece& piece, std::size_t target_triangles);
+
+#endif // TETISO_HAVE_OPENMESH
 
 } // namespace tetiso::reference
