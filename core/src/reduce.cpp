@@ -16,10 +16,11 @@
 //   4. classify:  per edge, the collapse branch that applies and the
 //                 priority (cheap: lengths, valences, no Φ);
 //   5. select:    an independent set — no two chosen operations closer than
-//                 path length 2 — by local maxima of the priority, gathered
-//                 over vertices and then over their 1-rings, a few passes;
-//                 Φ, the position and the legality tests are computed here,
-//                 only for what could still be chosen; then the flips;
+//                 path length 2 — the paper's greedy choice in priority
+//                 order, made on several threads by deterministic
+//                 reservations; Φ, the position and the legality tests are
+//                 computed here, only for what could still be chosen; then
+//                 the flips;
 //   6. apply:     the chosen operations touch disjoint triangles and vertices;
 //   7. compact:   drop removed vertices and triangles, keeping their order (so
 //                 vertex keys stay sorted).
@@ -108,6 +109,23 @@ void parallel_for_tests(int threads, i64 n, const Function& function) {
 #ifdef _OPENMP
     if (threads > 1 && n > kParallelMinTests) {
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 16)
+        for (i64 i = 0; i < n; ++i) function(i);
+        return;
+    }
+#endif
+    (void)threads;
+    for (i64 i = 0; i < n; ++i) function(i);
+}
+
+// parallel_for for the reservations' window: a few thousand cheap elements
+// per loop, contiguous blocks so that threads do not share the cache lines
+// of a per-element byte array.
+constexpr i64 kParallelMinWindow = 2048;
+template <class Function>
+void parallel_for_window(int threads, i64 n, const Function& function) {
+#ifdef _OPENMP
+    if (threads > 1 && n > kParallelMinWindow) {
+#pragma omp parallel for num_threads(threads) schedule(static)
         for (i64 i = 0; i < n; ++i) function(i);
         return;
     }
@@ -1236,62 +1254,55 @@ private:
 
 // ---------------------------------------------------------------------------
 // Step 5: independent set. Operation o touches the vertex set S(o) (the two
-// ends of a collapse; the ends and both opposite vertices of a flip). In each
-// pass, o is picked when it beats every active operation o' whose S(o') lies
-// within path length 1 of S(o): best[v] is the best active operation touching
-// v, ring[v] the best over v's closed 1-ring, and o is picked when
-// ring[v] == o for all v in S(o) — the parallel form of the paper's
-// sequential choice: best[] is a max scattered from the operations (a
-// compare-and-swap loop when threaded; a max under a total order does not
-// depend on the order of the updates), ring[] a gather over 1-rings, and the
-// chosen operations stamp their closed neighbourhoods as claimed (they are
-// few, so this beats every vertex looking around itself). Priorities are
-// fixed within a round and legality does not depend on what else is chosen,
-// so passes that run to the end (selection_passes) choose exactly what the
-// sequential greedy choice in priority order would. Two picked operations are at path
-// length >= 2, so their leaves share no face and the tests of each stay valid
-// whatever the others do. In the first passes a picked operation runs its
-// legality tests when picked and, if it fails, is refused and claims nothing;
-// after them every operation still active is tested at once, so illegal
-// ones cannot drag the selection through many more passes. Operations
-// within path length 1 of a chosen one leave the active set, and passes
-// repeat over the shrinking active set until it is empty: the result is a
-// maximal independent set of legal operations, and an illegal operation
-// never blocks its neighbours. Ties in priority fall to the vertex keys,
-// never to thread or order. On one thread the sequential greedy choice runs
-// as such (choose_in_order), and it also finishes whatever the passes leave
-// active after selection_passes, so the set is the same for every count.
-
-// Passes in which a picked operation runs its legality tests when picked;
-// after them every remaining operation is tested at once, so that chains of
-// illegal local maxima (each refusal frees only its neighbours for the next
-// pass) cannot drag the selection on to selection_passes. A test costs most
-// in late rounds, when each face holds tens of samples, and a pass costs
-// little since it scatters from the active operations: 16 lazy passes
-// instead of 4 took a 100^3-cell domain's reduction from 2.37 to 1.92 s and
-// the N = 100 paper surface's from 10.7 to 10.2 s (medians of 4 interleaved
-// runs on the 2-core VM); with no bulk test at all a late round of the domain
-// needed 64 passes. The chosen set does not depend on it.
-constexpr int kLazyPasses = 16;
+// ends of a collapse; the ends and both opposite vertices of a flip); o and o'
+// conflict when S(o') lies within path length 1 of S(o). The paper's choice
+// is sequential: operations in priority order, each taken when no operation
+// taken before conflicts with it and it is legal. Priorities are fixed within
+// a round and legality does not depend on what else is chosen, so that set
+// is a function of the round alone; ties in priority fall to the vertex keys,
+// never to thread or order. Two chosen operations are at path length >= 2, so
+// their leaves share no face and the tests of each stay valid whatever the
+// others do; an illegal operation never blocks its neighbours. On one thread
+// the choice runs as such (choose_in_order); on more, deterministic
+// reservations (choose_by_reservations) make exactly the same choices with
+// the tests in parallel, so the set is the same for every count.
 
 // chosen[e]: kChosenTested when the operation passed its legality test at the
 // moment it was picked, so the test's sample placements are already stored
 // (the test runs once instead of again before apply).
 constexpr u8 kChosen = 1, kChosenTested = 2;
 
+// The reservations' choice (Selector::choose_by_reservations): a window of
+// at least kReservationWindowMin operations, or 1/kReservationSteps of the
+// round's, so a round takes some tens of steps of three parallel loops; with
+// kReservationMin operations or fewer the sweep runs on the calling thread.
+constexpr std::size_t kReservationWindowMin = 512;
+constexpr std::size_t kReservationSteps = 32;
+constexpr i64 kReservationMin = 256;
+constexpr i32 kNoReservation = std::numeric_limits<i32>::max();
+
+// An operation in the reservations' window: its rank in the round's order,
+// the edge and its ends (read once, when it enters).
+struct WindowSlot {
+    i32 rank, e, u, w;
+};
+
 // The selection's working arrays, kept from round to round so that no round
 // pays for fresh pages (on the 2-core VM a reduction ran 5-8 % faster when
 // glibc was told to keep freed memory, so page faults are not free there).
 struct SelectScratch {
-    std::vector<i32> best, ring, active_list, touched, next;
-    std::vector<std::vector<i32>> per_thread; // vertices each thread touched first
-    std::vector<u8> mark, picked;
-    std::vector<i32> claimed; // == the pass's stamp: within path length 1 of a chosen operation
+    std::vector<i32> claimed; // == the stamp: within path length 1 of a chosen operation
     // The sequential choice's order (a radix sort by priority).
     std::vector<u32> sort_key, sort_key_spare;
     std::vector<i32> order, order_spare;
     std::vector<std::pair<i32, i32>> ends; // the sweep's operations' ends, in its order
     std::vector<u32> histogram;
+    // The reservations' choice: per vertex, the earliest rank (position in
+    // `order`) of a window operation touching it; the window, and each
+    // slot's state in the current step.
+    std::vector<i32> reservation;
+    std::vector<WindowSlot> window, waiting;
+    std::vector<u8> window_state;
 };
 
 class Selector {
@@ -1322,156 +1333,22 @@ public:
     }
 
     // candidates: the edges with an operation, ascending. Sets chosen[e] for
-    // the operations chosen (kChosen or kChosenTested), refused[e] for those
-    // found illegal. legal(e, commit): commit is true when e is chosen if legal.
-    // On one thread the choice is made in one sweep in priority order (the
-    // passes below choose the same set, at more cost on one thread);
-    // with more, by passes, the last of which (max_passes) hands what is
-    // still active to the same sweep, so the set never depends on the count.
+    // the operations chosen (kChosenTested), refused[e] for those found
+    // illegal. legal(e, commit): commit is true when e is chosen if legal.
     template <class Legal>
-    void select(int threads, int max_passes, const std::vector<i32>& candidates,
-                std::vector<u8>& chosen, std::vector<u8>& refused, const Legal& legal) const {
-        const i32 nv = s_.vertices();
-        scratch_.claimed.assign(static_cast<std::size_t>(nv), 0);
+    void select(int threads, const std::vector<i32>& candidates, std::vector<u8>& chosen, std::vector<u8>& refused,
+                const Legal& legal) const {
+        scratch_.claimed.assign(static_cast<std::size_t>(s_.vertices()), 0);
         stamp_ = 0;
-        if (threads <= 1) {
+        if (threads <= 1 || static_cast<i64>(candidates.size()) <= kReservationMin)
             choose_in_order(candidates, chosen, refused, legal);
-            return;
-        }
-        scratch_.best.assign(static_cast<std::size_t>(nv), -1);
-        scratch_.ring.resize(static_cast<std::size_t>(nv));
-        scratch_.mark.assign(static_cast<std::size_t>(nv), 0);
-        std::vector<i32>& A = scratch_.active_list;
-        A.assign(candidates.begin(), candidates.end());
-        std::vector<i32>& T = scratch_.touched;
-        std::vector<i32>& next = scratch_.next;
-        std::vector<u8>& picked = scratch_.picked;
-        T.clear();
-        for (int pass = 0; pass < max_passes && !A.empty(); ++pass) {
-            if (pass == kLazyPasses) {
-                // What the first passes left: test it all at once.
-                parallel_for_tests(threads, static_cast<i64>(A.size()), [&](i64 ai) {
-                    const i32 e = A[static_cast<std::size_t>(ai)];
-                    if (!legal(e, false)) refused[static_cast<std::size_t>(e)] = 1;
-                });
-                next.clear();
-                for (const i32 e : A)
-                    if (!refused[static_cast<std::size_t>(e)]) next.push_back(e);
-                A.swap(next);
-                if (A.empty()) break;
-            }
-            // best[v]: the best active operation touching v, a max under a
-            // total order, so scattering from the operations gives the same
-            // value in any order (a compare-and-swap loop when threaded).
-            // T: the vertices touched (best[] is -1 everywhere else).
-            for (const i32 v : T) scratch_.best[static_cast<std::size_t>(v)] = -1;
-            T.clear();
-            const i64 na = static_cast<i64>(A.size());
-#ifdef _OPENMP
-            if (threads > 1 && na > kParallelMin) {
-                // Each thread lists the vertices it marked first; T's order
-                // differs from run to run, but only sets are read from it.
-                scratch_.per_thread.resize(static_cast<std::size_t>(threads));
-#pragma omp parallel num_threads(threads)
-                {
-                    std::vector<i32>& mine = scratch_.per_thread[static_cast<std::size_t>(omp_get_thread_num())];
-                    mine.clear();
-#pragma omp for schedule(static)
-                    for (i64 ai = 0; ai < na; ++ai) {
-                        const i32 e = A[static_cast<std::size_t>(ai)];
-                        i32 vs[4];
-                        const int n = touched(e, vs);
-                        for (int i = 0; i < n; ++i) {
-                            const auto v = static_cast<std::size_t>(vs[i]);
-                            std::atomic_ref<i32> best(scratch_.best[v]);
-                            i32 current = best.load(std::memory_order_relaxed);
-                            while (beats(e, current) &&
-                                   !best.compare_exchange_weak(current, e, std::memory_order_relaxed)) {
-                            }
-                            if (!std::atomic_ref<u8>(scratch_.mark[v]).exchange(1, std::memory_order_relaxed))
-                                mine.push_back(vs[i]);
-                        }
-                    }
-                }
-                for (int t = 0; t < threads; ++t) {
-                    const std::vector<i32>& theirs = scratch_.per_thread[static_cast<std::size_t>(t)];
-                    T.insert(T.end(), theirs.begin(), theirs.end());
-                }
-                parallel_for(threads, static_cast<i64>(T.size()),
-                             [&](i64 ti) { scratch_.mark[static_cast<std::size_t>(T[static_cast<std::size_t>(ti)])] = 0; });
-            } else
-#endif
-            {
-                for (const i32 e : A) {
-                    i32 vs[4];
-                    const int n = touched(e, vs);
-                    for (int i = 0; i < n; ++i) {
-                        i32& best = scratch_.best[static_cast<std::size_t>(vs[i])];
-                        if (best < 0) T.push_back(vs[i]);
-                        if (beats(e, best)) best = e;
-                    }
-                }
-            }
-            const i64 nt = static_cast<i64>(T.size());
-            parallel_for(threads, nt, [&](i64 ti) {
-                const i32 v = T[static_cast<std::size_t>(ti)];
-                i32 b = scratch_.best[static_cast<std::size_t>(v)];
-                for (i32 j = 0, n = fans_.nn(v); j < n; ++j) {
-                    const i32 x = scratch_.best[static_cast<std::size_t>(fans_.nbr(v, j))];
-                    if (x >= 0 && beats(x, b)) b = x;
-                }
-                scratch_.ring[static_cast<std::size_t>(v)] = b;
-            });
-            // An operation that wins at every vertex it touches is picked; in
-            // the first passes it runs its legality tests now.
-            picked.assign(A.size(), 0);
-            const bool lazy = pass < kLazyPasses;
-            parallel_for_tests(threads, na, [&](i64 ai) {
-                const i32 e = A[static_cast<std::size_t>(ai)];
-                i32 vs[4];
-                const int n = touched(e, vs);
-                bool win = true;
-                for (int i = 0; i < n && win; ++i) win = scratch_.ring[static_cast<std::size_t>(vs[i])] == e;
-                if (!win) return;
-                picked[static_cast<std::size_t>(ai)] = 1;
-                if (lazy && !legal(e, true)) {
-                    refused[static_cast<std::size_t>(e)] = 1;
-                    return;
-                }
-                chosen[static_cast<std::size_t>(e)] = lazy ? kChosenTested : kChosen;
-            });
-            // Claimed: within path length 1 of a chosen operation. The chosen
-            // are few (about one in twenty in a round's first pass), so they
-            // stamp their closed neighbourhoods rather than every touched
-            // vertex looking around itself.
-            ++stamp_;
-            parallel_for(threads, na, [&](i64 ai) {
-                if (!picked[static_cast<std::size_t>(ai)]) return;
-                const i32 e = A[static_cast<std::size_t>(ai)];
-                if (!chosen[static_cast<std::size_t>(e)]) return;
-                claim_around(e);
-            });
-            // What stays active: neither picked nor claimed. The test runs in
-            // parallel and leaves its answer in picked[] (1: drop); the
-            // compaction after it only reads that array in order.
-            parallel_for(threads, na, [&](i64 ai) {
-                u8& drop = picked[static_cast<std::size_t>(ai)];
-                if (drop) return;
-                i32 vs[4];
-                const int n = touched(A[static_cast<std::size_t>(ai)], vs);
-                for (int i = 0; i < n && !drop; ++i) drop = scratch_.claimed[static_cast<std::size_t>(vs[i])] == stamp_;
-            });
-            next.clear();
-            for (std::size_t ai = 0; ai < A.size(); ++ai)
-                if (!picked[ai]) next.push_back(A[ai]);
-            A.swap(next);
-        }
-        if (!A.empty()) choose_in_order(A, chosen, refused, legal);
+        else
+            choose_by_reservations(threads, candidates, chosen, refused, legal);
     }
 
     // After select(): stamps the closed neighbourhoods of the operations it
-    // chose (the passes' stamps are per pass), so that clear() tells what the
-    // round's later choices may still take.
+    // chose afresh, so that clear() tells what the round's later choices (the
+    // flips) may still take.
     void claim_chosen(int threads, const std::vector<i32>& candidates, const std::vector<u8>& chosen) const {
         ++stamp_;
         parallel_for(threads, static_cast<i64>(candidates.size()), [&](i64 ci) {
@@ -1510,9 +1387,7 @@ public:
 
 private:
     // The sequential greedy choice: operations in descending priority, each
-    // taken when it is clear of those taken before and legal. ops holds no
-    // operation within path length 1 of one chosen earlier in the round, so
-    // finishing the passes' work this way gives what the passes would.
+    // taken when it is clear of those taken before and legal.
     //
     // The sweep visits the surface in random order, and most operations are
     // dropped at the first look, clear() finding an end claimed: that look
@@ -1546,6 +1421,98 @@ private:
             }
             chosen[static_cast<std::size_t>(e)] = kChosenTested;
             claim_around(e);
+        }
+    }
+
+    // The same sequential greedy choice, on several threads, by deterministic
+    // reservations: operations enter a window in priority order; in each step
+    // every window operation not yet blocked by a chosen one reserves its two
+    // ends with its rank (an atomic minimum), and one that finds no earlier
+    // rank anywhere within path length 1 of its ends has no undecided earlier
+    // operation in conflict with it. Its turn in the sequential order has
+    // come: it is tested, and chosen if legal, exactly as the sweep would;
+    // those decided in one step are pairwise clear of each other. The others
+    // wait for the next step, ahead of the operations entering behind them.
+    // Each operation is tested at most once, the tests run in parallel, and
+    // the set is the sweep's for any count. On the 16-core device this chose
+    // 1.16-1.25x faster than the passes it replaced (local maxima of the
+    // priority, with a bulk test of what was left after 16 passes) at 4 and 8
+    // threads on the N = 100 paper surface, and 1.13x at 4 threads on a
+    // 346 K-triangle gyroid (results/speedup/README.md, session 13).
+    template <class Legal>
+    void choose_by_reservations(int threads, const std::vector<i32>& ops, std::vector<u8>& chosen,
+                                std::vector<u8>& refused, const Legal& legal) const {
+        order_by_priority(ops);
+        ++stamp_;
+        const std::vector<i32>& order = scratch_.order;
+        const std::size_t n = order.size();
+        std::vector<i32>& reservation = scratch_.reservation;
+        std::vector<WindowSlot>& window = scratch_.window;
+        std::vector<WindowSlot>& waiting = scratch_.waiting;
+        std::vector<u8>& state = scratch_.window_state;
+        reservation.assign(static_cast<std::size_t>(s_.vertices()), kNoReservation);
+        window.clear();
+        const std::size_t width = std::max<std::size_t>(kReservationWindowMin, n / kReservationSteps);
+        constexpr u8 kReserved = 1, kDecided = 2, kTaken = 4;
+        std::size_t next = 0;
+        while (next < n || !window.empty()) {
+            while (window.size() < width && next < n) {
+                window.push_back({static_cast<i32>(next), order[next], -1, -1});
+                ++next;
+            }
+            const i64 nw = static_cast<i64>(window.size());
+            state.assign(window.size(), 0);
+            parallel_for_window(threads, nw, [&](i64 wi) {
+                WindowSlot& slot = window[static_cast<std::size_t>(wi)];
+                if (slot.u < 0) {
+                    slot.u = edges_.v0[static_cast<std::size_t>(slot.e)];
+                    slot.w = edges_.v1[static_cast<std::size_t>(slot.e)];
+                }
+                if (!clear_collapse(slot.u, slot.w)) return; // blocked: decided for good
+                state[static_cast<std::size_t>(wi)] = kReserved;
+                for (const i32 v : {slot.u, slot.w}) {
+                    std::atomic_ref<i32> held(reservation[static_cast<std::size_t>(v)]);
+                    i32 current = held.load(std::memory_order_relaxed);
+                    while (slot.rank < current &&
+                           !held.compare_exchange_weak(current, slot.rank, std::memory_order_relaxed)) {
+                    }
+                }
+            });
+            parallel_for_tests(threads, nw, [&](i64 wi) {
+                u8& st = state[static_cast<std::size_t>(wi)];
+                if (!st) return;
+                const WindowSlot& slot = window[static_cast<std::size_t>(wi)];
+                // Its own ends first: a shared end is the commonest conflict.
+                if (reservation[static_cast<std::size_t>(slot.u)] != slot.rank ||
+                    reservation[static_cast<std::size_t>(slot.w)] != slot.rank)
+                    return;
+                for (const i32 end : {slot.u, slot.w})
+                    for (i32 j = 0, m = fans_.nn(end); j < m; ++j)
+                        if (reservation[static_cast<std::size_t>(fans_.nbr(end, j))] < slot.rank)
+                            return; // an earlier operation nearby is undecided
+                st |= kDecided;
+                if (!legal(slot.e, true)) {
+                    refused[static_cast<std::size_t>(slot.e)] = 1;
+                    return;
+                }
+                chosen[static_cast<std::size_t>(slot.e)] = kChosenTested;
+                st |= kTaken;
+            });
+            parallel_for_window(threads, nw, [&](i64 wi) {
+                const u8 st = state[static_cast<std::size_t>(wi)];
+                if (!st) return;
+                const WindowSlot& slot = window[static_cast<std::size_t>(wi)];
+                for (const i32 v : {slot.u, slot.w})
+                    std::atomic_ref<i32>(reservation[static_cast<std::size_t>(v)])
+                        .store(kNoReservation, std::memory_order_relaxed);
+                if (st & kTaken) claim_around(slot.e);
+            });
+            // The waiting keep their order, ahead of the operations still to
+            // enter: the window stays sorted by rank.
+            waiting.clear();
+            for (std::size_t wi = 0; wi < window.size(); ++wi)
+                if (state[wi] == kReserved) waiting.push_back(window[wi]);
+            window.swap(waiting);
         }
     }
 
@@ -1681,7 +1648,6 @@ void check_options(const ReduceOptions& o) {
         bad("short_edge_ratio = " + std::to_string(o.short_edge_ratio) + " is outside [0, 1)");
     if (!(o.flip_max_dihedral_degrees >= 0.0 && o.flip_max_dihedral_degrees < 90.0))
         bad("flip_max_dihedral_degrees = " + std::to_string(o.flip_max_dihedral_degrees) + " is outside [0, 90)");
-    if (o.selection_passes < 1) bad("selection_passes = " + std::to_string(o.selection_passes) + " is below 1");
 }
 
 // ---------------------------------------------------------------------------
@@ -1902,7 +1868,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         // only when it reaches it unblocked: most are blocked by a chosen
         // neighbour and never need their Φ this round.
         const Selector selector(s, fans, edges, ops, select_scratch);
-        selector.select(threads, options.selection_passes, candidate_list, chosen, refused,
+        selector.select(threads, candidate_list, chosen, refused,
                         [&](i32 e, bool commit) {
                             return evaluator.legal(e, ops, commit && samples.on() ? &samples.owner : nullptr);
                         });

@@ -74,12 +74,6 @@ struct ReduceOptions {
     // minimum angle of the two faces by more than 20 %.
     bool flips = true;
     double flip_max_dihedral_degrees = 10.0;
-    // Upper bound on the passes of the parallel independent-set selection in
-    // one round; each pass adds operations clear of those already chosen,
-    // and passes stop as soon as no operation is left to consider. What is
-    // left after the last pass is chosen sequentially in priority order, as
-    // a single thread chooses everything, so the output does not depend on it.
-    int selection_passes = 64;
 };
 
 struct ReduceRound {
