@@ -89,10 +89,11 @@ constexpr i64 kParallelMin = 16384;
 // results/speedup/device-n500-s8-reduce-threads.txt).
 constexpr i64 kParallelMinTests = 64;
 
+// min_parallel: the size below which the loop stays on the calling thread.
 template <class Function>
-void parallel_for(int threads, i64 n, const Function& function) {
+void parallel_for(int threads, i64 n, const Function& function, i64 min_parallel = kParallelMin) {
 #ifdef _OPENMP
-    if (threads > 1 && n > kParallelMin) {
+    if (threads > 1 && n > min_parallel) {
 #pragma omp parallel for num_threads(threads) schedule(static)
         for (i64 i = 0; i < n; ++i) function(i);
         return;
@@ -117,22 +118,10 @@ void parallel_for_tests(int threads, i64 n, const Function& function) {
     for (i64 i = 0; i < n; ++i) function(i);
 }
 
-// parallel_for for the reservations' window: a few thousand cheap elements
-// per loop, contiguous blocks so that threads do not share the cache lines
-// of a per-element byte array.
+// parallel_for's threshold for the reservations' window: a few thousand
+// cheap elements per loop, in contiguous blocks (a static schedule) so that
+// threads do not share the cache lines of a per-element byte array.
 constexpr i64 kParallelMinWindow = 2048;
-template <class Function>
-void parallel_for_window(int threads, i64 n, const Function& function) {
-#ifdef _OPENMP
-    if (threads > 1 && n > kParallelMinWindow) {
-#pragma omp parallel for num_threads(threads) schedule(static)
-        for (i64 i = 0; i < n; ++i) function(i);
-        return;
-    }
-#endif
-    (void)threads;
-    for (i64 i = 0; i < n; ++i) function(i);
-}
 
 // offsets[i] = sum of counts[0..i), offsets has counts.size() + 1 entries.
 // Integer sums: the result is exact and the same in any order.
@@ -1462,7 +1451,7 @@ private:
             }
             const i64 nw = static_cast<i64>(window.size());
             state.assign(window.size(), 0);
-            parallel_for_window(threads, nw, [&](i64 wi) {
+            parallel_for(threads, nw, [&](i64 wi) {
                 WindowSlot& slot = window[static_cast<std::size_t>(wi)];
                 if (slot.u < 0) {
                     slot.u = edges_.v0[static_cast<std::size_t>(slot.e)];
@@ -1477,7 +1466,7 @@ private:
                            !held.compare_exchange_weak(current, slot.rank, std::memory_order_relaxed)) {
                     }
                 }
-            });
+            }, kParallelMinWindow);
             parallel_for_tests(threads, nw, [&](i64 wi) {
                 u8& st = state[static_cast<std::size_t>(wi)];
                 if (!st) return;
@@ -1498,7 +1487,7 @@ private:
                 chosen[static_cast<std::size_t>(slot.e)] = kChosenTested;
                 st |= kTaken;
             });
-            parallel_for_window(threads, nw, [&](i64 wi) {
+            parallel_for(threads, nw, [&](i64 wi) {
                 const u8 st = state[static_cast<std::size_t>(wi)];
                 if (!st) return;
                 const WindowSlot& slot = window[static_cast<std::size_t>(wi)];
@@ -1506,7 +1495,7 @@ private:
                     std::atomic_ref<i32>(reservation[static_cast<std::size_t>(v)])
                         .store(kNoReservation, std::memory_order_relaxed);
                 if (st & kTaken) claim_around(slot.e);
-            });
+            }, kParallelMinWindow);
             // The waiting keep their order, ahead of the operations still to
             // enter: the window stays sorted by rank.
             waiting.clear();
