@@ -769,7 +769,8 @@ public:
     // Whether collapse e is possible: a kPending one gets its Φ and position
     // first (kNone when Φ is not above Φ*), then the legality tests run.
     // owner: where to move the samples of a legal collapse (its caller
-    // chooses every operation this finds legal); null to only test.
+    // chooses every operation this finds legal); null when there are no
+    // samples.
     bool legal(i32 e, Ops& ops, std::vector<i32>* owner) const {
         const auto i = static_cast<std::size_t>(e);
         if (ops.kind[i] == kFlip) return true; // fully tested in propose_flip
@@ -1081,28 +1082,10 @@ private:
     }
 
 public:
-    // Re-measures the samples of a chosen collapse's faces against the new
-    // faces and gives each its new owner (before apply() changes anything:
-    // this reads the fans and positions legal_collapse read, so it finds the
-    // same faces).
-    void move_collapse_samples(i32 e, const Ops& ops, std::vector<i32>& owner) const {
-        const auto i = static_cast<std::size_t>(e);
-        const EdgeSlots r = slots(e);
-        NewFan fan;
-        fan.p = {ops.px[i], ops.py[i], ops.pz[i]};
-        // At most NewFan::kMax faces: legal_collapse refuses larger fans
-        // when there are samples.
-        for_each_leaf_face(r, [&](i32 slot, bool removed) {
-            if (removed) return;
-            fan.a[fan.n] = s_.pos(fans_.next[static_cast<std::size_t>(slot)]);
-            fan.b[fan.n] = s_.pos(fans_.prev[static_cast<std::size_t>(slot)]);
-            fan.tri[fan.n++] = face(slot);
-        });
-        double worst = 0.0;
-        place_samples(r, fan, worst, [&](i32 sample, i32 t, double) { owner[static_cast<std::size_t>(sample)] = t; });
-    }
-
-    // The same for a chosen flip.
+    // Re-measures the samples of a chosen flip's two faces against the new
+    // ones and gives each its new owner (before apply() changes anything).
+    // A chosen collapse needs no such step: its legality test, run when its
+    // turn came, already moved its samples.
     void move_flip_samples(i32 e, std::vector<i32>& owner) const {
         const EdgeSlots r = slots(e);
         double worst = 0.0;
@@ -1256,10 +1239,10 @@ private:
 // reservations (choose_by_reservations) make exactly the same choices with
 // the tests in parallel, so the set is the same for every count.
 
-// chosen[e]: kChosenTested when the operation passed its legality test at the
-// moment it was picked, so the test's sample placements are already stored
-// (the test runs once instead of again before apply).
-constexpr u8 kChosen = 1, kChosenTested = 2;
+// chosen[e]: 1 for a chosen operation. A collapse is tested only when its
+// turn has come, so its test's sample placements are stored at once (the test
+// never runs again before apply).
+constexpr u8 kChosen = 1;
 
 // The reservations' choice (Selector::choose_by_reservations): a window of
 // at least kReservationWindowMin operations, or 1/kReservationSteps of the
@@ -1322,8 +1305,8 @@ public:
     }
 
     // candidates: the edges with an operation, ascending. Sets chosen[e] for
-    // the operations chosen (kChosenTested), refused[e] for those found
-    // illegal. legal(e, commit): commit is true when e is chosen if legal.
+    // the operations chosen, refused[e] for those found illegal. legal(e)
+    // tests e, which is chosen if legal, and stores its sample placements.
     template <class Legal>
     void select(int threads, const std::vector<i32>& candidates, std::vector<u8>& chosen, std::vector<u8>& refused,
                 const Legal& legal) const {
@@ -1404,11 +1387,11 @@ private:
             }
             const i32 e = order[k];
             if (!clear_collapse(ends[k].first, ends[k].second)) continue;
-            if (!legal(e, true)) {
+            if (!legal(e)) {
                 refused[static_cast<std::size_t>(e)] = 1;
                 continue;
             }
-            chosen[static_cast<std::size_t>(e)] = kChosenTested;
+            chosen[static_cast<std::size_t>(e)] = kChosen;
             claim_around(e);
         }
     }
@@ -1480,11 +1463,11 @@ private:
                         if (reservation[static_cast<std::size_t>(fans_.nbr(end, j))] < slot.rank)
                             return; // an earlier operation nearby is undecided
                 st |= kDecided;
-                if (!legal(slot.e, true)) {
+                if (!legal(slot.e)) {
                     refused[static_cast<std::size_t>(slot.e)] = 1;
                     return;
                 }
-                chosen[static_cast<std::size_t>(slot.e)] = kChosenTested;
+                chosen[static_cast<std::size_t>(slot.e)] = kChosen;
                 st |= kTaken;
             });
             parallel_for(threads, nw, [&](i64 wi) {
@@ -1858,9 +1841,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         // neighbour and never need their Φ this round.
         const Selector selector(s, fans, edges, ops, select_scratch);
         selector.select(threads, candidate_list, chosen, refused,
-                        [&](i32 e, bool commit) {
-                            return evaluator.legal(e, ops, commit && samples.on() ? &samples.owner : nullptr);
-                        });
+                        [&](i32 e) { return evaluator.legal(e, ops, samples.on() ? &samples.owner : nullptr); });
         // Flips: for the interior edges with no collapse that no chosen
         // collapse blocks. refused[e] (set by the selection for a collapse
         // found impossible or illegal) ends as "no operation is possible on
@@ -1894,16 +1875,15 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         stats.evaluated = evaluated;
         st.select += since(t0);
         t0 = now();
-        // Samples still to move: those of the flips and of the collapses
-        // chosen without a committed test (a collapse tested when chosen
-        // moved its samples then).
+        // Samples still to move: those of the flips (a collapse's test moved
+        // its samples when it was chosen).
         to_move.clear();
         for (i32 e = 0; e < ne; ++e) {
             const auto i = static_cast<std::size_t>(e);
             if (!chosen[i]) continue;
             if (ops.kind[i] == kCollapse) ++stats.collapses;
             else ++stats.flips;
-            if (ops.kind[i] == kFlip || chosen[i] != kChosenTested) to_move.push_back(e);
+            if (ops.kind[i] == kFlip) to_move.push_back(e);
         }
         if (stats.collapses == 0 && stats.flips == 0) { // the next round would find what this one did
             rep.rounds.push_back(stats);
@@ -1914,9 +1894,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         // move costs about what a legality test does.
         if (samples.on())
             parallel_for_tests(threads, static_cast<i64>(to_move.size()), [&](i64 m) {
-                const i32 e = to_move[static_cast<std::size_t>(m)];
-                if (ops.kind[static_cast<std::size_t>(e)] == kFlip) evaluator.move_flip_samples(e, samples.owner);
-                else evaluator.move_collapse_samples(e, ops, samples.owner);
+                evaluator.move_flip_samples(to_move[static_cast<std::size_t>(m)], samples.owner);
             });
         apply(s, fans, edges, ops, chosen, threads, vertex_alive, triangle_alive, changed);
         st.apply += since(t0);
