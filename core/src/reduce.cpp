@@ -1252,6 +1252,9 @@ constexpr std::size_t kReservationWindowMin = 512;
 constexpr std::size_t kReservationSteps = 32;
 constexpr i64 kReservationMin = 256;
 constexpr i32 kNoReservation = std::numeric_limits<i32>::max();
+// From this many operations a round's sort by priority runs on several
+// threads (below it, one thread sorts in a millisecond or less).
+constexpr std::size_t kParallelSortMin = std::size_t{1} << 16;
 
 // An operation in the reservations' window: its rank in the round's order,
 // the edge and its ends (read once, when it enters).
@@ -1414,7 +1417,7 @@ private:
     template <class Legal>
     void choose_by_reservations(int threads, const std::vector<i32>& ops, std::vector<u8>& chosen,
                                 std::vector<u8>& refused, const Legal& legal) const {
-        order_by_priority(ops);
+        order_by_priority(ops, threads);
         ++stamp_;
         const std::vector<i32>& order = scratch_.order;
         const std::size_t n = order.size();
@@ -1490,15 +1493,21 @@ private:
 
     // scratch_.order = ops, best first (beats() order): a stable LSD radix
     // sort of the complemented priorities, skipping the digits all share;
-    // equal priorities are then put in beats() order. Digits of 16 bits for
-    // large rounds (two passes); 8 for small ones, where clearing and
-    // scanning 65,536-entry counters cost more than the sort (5 % of a job's
-    // profile with 30^3-cell domains, whose late rounds have tens of
-    // operations).
-    void order_by_priority(const std::vector<i32>& ops) const {
+    // equal priorities are then put in beats() order. On one thread, digits
+    // of 16 bits for large rounds (two passes) and of 8 for small ones, where
+    // clearing and scanning 65,536-entry counters cost more than the sort (5 %
+    // of a job's profile with 30^3-cell domains, whose late rounds have tens
+    // of operations). On several, each thread counts and scatters its own
+    // block of the keys, with 11-bit digits so that the per-block counters
+    // stay small and their scan cheap; every stable sort by the same key gives
+    // the same order, so the thread count does not show in the result. (The
+    // one-thread sort was 0.24 s of the 2-thread selection of the paper
+    // surface on the 2-core VM, and the reservations wait for it each round.)
+    void order_by_priority(const std::vector<i32>& ops, int threads = 1) const {
         const std::size_t n = ops.size();
-        if (n < (std::size_t{1} << 14)) radix_order<8>(ops);
-        else radix_order<16>(ops);
+        if (n < (std::size_t{1} << 14)) radix_order<8>(ops, 1);
+        else if (threads > 1 && n >= kParallelSortMin) radix_order<11>(ops, threads);
+        else radix_order<16>(ops, 1);
         const std::vector<u32>& key = scratch_.sort_key;
         std::vector<i32>& order = scratch_.order;
         for (std::size_t i = 0; i + 1 < n;) {
@@ -1511,8 +1520,10 @@ private:
         }
     }
 
+    // threads: the number of blocks, each counted and scattered by one
+    // iteration of a parallel loop; 1 sorts on the calling thread.
     template <int kDigitBits>
-    void radix_order(const std::vector<i32>& ops) const {
+    void radix_order(const std::vector<i32>& ops, int threads) const {
         const std::size_t n = ops.size();
         std::vector<u32>& key = scratch_.sort_key;
         std::vector<u32>& key_spare = scratch_.sort_key_spare;
@@ -1520,29 +1531,49 @@ private:
         std::vector<i32>& order_spare = scratch_.order_spare;
         key.resize(n);
         key_spare.resize(n);
-        order.assign(ops.begin(), ops.end());
+        order.resize(n);
         order_spare.resize(n);
-        for (std::size_t i = 0; i < n; ++i) key[i] = ~ops_.priority[static_cast<std::size_t>(ops[i])];
-        constexpr int kDigits = 32 / kDigitBits;
+        parallel_for(threads, static_cast<i64>(n), [&](i64 i) {
+            const auto k = static_cast<std::size_t>(i);
+            order[k] = ops[k];
+            key[k] = ~ops_.priority[static_cast<std::size_t>(ops[k])];
+        });
+        const auto blocks = static_cast<std::size_t>(threads);
+        const auto block_begin = [&](std::size_t b) { return n * b / blocks; };
+        constexpr int kDigits = (32 + kDigitBits - 1) / kDigitBits;
         constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
         std::vector<u32>& count = scratch_.histogram;
-        count.assign(kDigits * kBuckets, 0);
-        for (const u32 k : key)
-            for (int d = 0; d < kDigits; ++d) ++count[d * kBuckets + ((k >> (d * kDigitBits)) & (kBuckets - 1))];
+        count.resize(blocks * kBuckets);
         for (int d = 0; d < kDigits; ++d) {
-            u32* c = count.data() + d * kBuckets;
-            if (n == 0 || c[(key[0] >> (d * kDigitBits)) & (kBuckets - 1)] == n) continue;
+            const int shift = d * kDigitBits;
+            const auto digit = [&](u32 k) { return (k >> shift) & (kBuckets - 1); };
+            parallel_for(threads, static_cast<i64>(blocks), [&](i64 b) {
+                u32* c = count.data() + static_cast<std::size_t>(b) * kBuckets;
+                std::fill(c, c + kBuckets, 0u);
+                for (std::size_t i = block_begin(static_cast<std::size_t>(b)); i < block_begin(static_cast<std::size_t>(b) + 1); ++i)
+                    ++c[digit(key[i])];
+            }, 0);
+            if (n == 0) return;
+            std::size_t shared = 0;
+            for (std::size_t b = 0; b < blocks; ++b) shared += count[b * kBuckets + digit(key[0])];
+            if (shared == n) continue;
+            // Offsets in bucket order and, within a bucket, block order: the
+            // scatter keeps the keys' order among equal digits (stable).
             u32 sum = 0;
-            for (std::size_t b = 0; b < kBuckets; ++b) {
-                const u32 here = c[b];
-                c[b] = sum;
-                sum += here;
-            }
-            for (std::size_t i = 0; i < n; ++i) {
-                const u32 at = c[(key[i] >> (d * kDigitBits)) & (kBuckets - 1)]++;
-                key_spare[at] = key[i];
-                order_spare[at] = order[i];
-            }
+            for (std::size_t bucket = 0; bucket < kBuckets; ++bucket)
+                for (std::size_t b = 0; b < blocks; ++b) {
+                    const u32 here = count[b * kBuckets + bucket];
+                    count[b * kBuckets + bucket] = sum;
+                    sum += here;
+                }
+            parallel_for(threads, static_cast<i64>(blocks), [&](i64 b) {
+                u32* c = count.data() + static_cast<std::size_t>(b) * kBuckets;
+                for (std::size_t i = block_begin(static_cast<std::size_t>(b)); i < block_begin(static_cast<std::size_t>(b) + 1); ++i) {
+                    const u32 at = c[digit(key[i])]++;
+                    key_spare[at] = key[i];
+                    order_spare[at] = order[i];
+                }
+            }, 0);
             key.swap(key_spare);
             order.swap(order_spare);
         }
