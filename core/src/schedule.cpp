@@ -12,9 +12,60 @@
 
 namespace tetiso {
 
+namespace {
+
+// Appends a copy of the bisection subtree under `node`, in depth-first
+// order; returns the copy's index.
+int copy_subtree(const std::vector<BisectionNode>& bisection, int node, std::vector<TaskNode>& tree) {
+    const BisectionNode& b = bisection[static_cast<std::size_t>(node)];
+    const int at = static_cast<int>(tree.size());
+    tree.push_back(TaskNode{b.first, b.count, -1, -1});
+    if (b.left >= 0) {
+        const int left = copy_subtree(bisection, b.left, tree);
+        const int right = copy_subtree(bisection, b.right, tree);
+        tree[static_cast<std::size_t>(at)].left = left;
+        tree[static_cast<std::size_t>(at)].right = right;
+    }
+    return at;
+}
+
+} // namespace
+
+std::vector<TaskNode> task_tree(const Decomposition& decomposition) {
+    const std::vector<BisectionNode>& bisection = decomposition.tree();
+    // The subtrees hanging off the bisection tree's rightmost path, in
+    // domain order: each left child on the path, then the path's last leaf.
+    std::vector<int> hanging;
+    int node = 0;
+    while (bisection[static_cast<std::size_t>(node)].left >= 0) {
+        hanging.push_back(bisection[static_cast<std::size_t>(node)].left);
+        node = bisection[static_cast<std::size_t>(node)].right;
+    }
+    hanging.push_back(node);
+
+    // The chain's seams first, root at 0: seam k (k = 0 .. h-2, h subtrees)
+    // joins the first h-1-k subtrees, seam k+1's piece, with subtree h-1-k.
+    // Then the subtrees in domain order, so leaf tasks keep it too.
+    const int seams = static_cast<int>(hanging.size()) - 1;
+    std::vector<TaskNode> tree(static_cast<std::size_t>(seams));
+    std::vector<int> subtree_root;
+    for (const int h : hanging) subtree_root.push_back(copy_subtree(bisection, h, tree));
+    for (int k = 0; k < seams; ++k) {
+        const int joined = seams - k; // the subtree this seam adds
+        const int rest = k + 1 < seams ? k + 1 : subtree_root[0];
+        TaskNode& seam = tree[static_cast<std::size_t>(k)];
+        seam.left = rest;
+        seam.right = subtree_root[static_cast<std::size_t>(joined)];
+        seam.first = 0;
+        seam.count = tree[static_cast<std::size_t>(seam.right)].first + tree[static_cast<std::size_t>(seam.right)].count;
+    }
+    return tree;
+}
+
 Job::Job(const JobConfig& config) : config_(config) {
     lattice_ = std::make_unique<Lattice>(config.lattice);
     decomposition_ = std::make_unique<Decomposition>(*lattice_, config.domains);
+    tree_ = task_tree(*decomposition_);
     field_ = make_field(config.field);
     const double level = config.level.value_or(field_->default_level());
     if (!std::isfinite(level)) throw Error("isosurface level is not a finite number");
@@ -24,14 +75,14 @@ Job::Job(const JobConfig& config) : config_(config) {
 }
 
 std::string Job::describe(int task) const {
-    const BisectionNode& n = node(task);
+    const TaskNode& n = node(task);
     if (n.count == 1) return "domain " + std::to_string(n.first);
     return "seam of domains " + std::to_string(n.first) + "-" + std::to_string(n.first + n.count - 1);
 }
 
 Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& record,
                    const TaskThreads& threads) const {
-    const BisectionNode& n = node(task);
+    const TaskNode& n = node(task);
     record.task = task;
     record.kind = kind(task);
     record.first_domain = n.first;
@@ -82,13 +133,13 @@ TaskQueue::TaskQueue(const Job& job) {
     parent_.assign(static_cast<std::size_t>(count), -1);
     children_done_.assign(static_cast<std::size_t>(count), 0);
     for (int t = 0; t < count; ++t) {
-        const BisectionNode& n = job.node(t);
+        const TaskNode& n = job.node(t);
         if (n.left >= 0) {
             parent_[static_cast<std::size_t>(n.left)] = t;
             parent_[static_cast<std::size_t>(n.right)] = t;
         } else {
-            // Leaf task indices follow the depth-first order of the tree, as
-            // domain ids do: ordering leaves by task index orders them by domain.
+            // Leaf task indices follow domain ids (task_tree): ordering leaves
+            // by task index orders them by domain.
             ready_.insert({1, t});
         }
     }
@@ -119,7 +170,7 @@ JobResult run_local(const Job& job, const Progress& progress) {
     int done = 0;
     while (!queue.finished()) {
         const int task = queue.pop();
-        const BisectionNode& n = job.node(task);
+        const TaskNode& n = job.node(task);
         TaskRecord record;
         record.start = seconds();
         const Piece* left = n.left >= 0 ? &*pieces[static_cast<std::size_t>(n.left)] : nullptr;

@@ -345,7 +345,7 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
     cpu_set_t job_cores = own_cores;
     auto execute_here = [&] {
         const int task = queue.pop();
-        const BisectionNode& n = job.node(task);
+        const TaskNode& n = job.node(task);
         TaskRecord record;
         record.start = seconds();
         int threads = job.config().threads;
@@ -423,7 +423,7 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
 
     auto dispatch = [&](int worker) {
         const int task = queue.pop();
-        const BisectionNode& n = job.node(task);
+        const TaskNode& n = job.node(task);
         Packer out;
         out.put<std::int32_t>(task);
         out.put<std::int32_t>(n.left >= 0 ? 2 : 0);
@@ -466,7 +466,7 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
             record.triangles_in = in.get<std::uint64_t>();
             record.triangles_out = in.get<std::uint64_t>();
             record.stages = in.get<TaskRecord::Stages>();
-            const BisectionNode& n = job.node(record.task);
+            const TaskNode& n = job.node(record.task);
             record.kind = job.kind(record.task);
             record.first_domain = n.first;
             record.domain_count = n.count;

@@ -2,9 +2,9 @@
 // reduced near each seam until one surface remains (paper, sections
 // "Problem overview" and "Load balancing and job scheduling").
 //
-// The tasks form the bisection tree of the decomposition: a leaf extracts and
-// reduces one domain, an inner node seams the pieces of its two children,
-// which are adjacent boxes. Tasks are handed out dynamically to whichever
+// The tasks form a tree over the decomposition (Job::node): a leaf extracts
+// and reduces one domain, an inner node seams the pieces of its two
+// children, which are adjacent. Tasks are handed out dynamically to whichever
 // worker is free (or, for the last seams, run by the controlling rank), but
 // which pieces are seamed together is fixed by the tree, and every task's
 // result depends only on its inputs, so the final surface is bit-identical
@@ -41,6 +41,32 @@ struct JobConfig {
 };
 
 enum class TaskKind : std::int32_t { domain = 0, seam = 1 };
+
+// One task of the job's tree: it covers domains [first, first + count); a
+// leaf (count 1) is one domain's task, an inner node seams its two
+// children's pieces.
+//
+// The tree is the bisection tree (Decomposition::tree) with its rightmost
+// path turned into a chain that adds the subtrees hanging off that path one
+// at a time, in domain order: ((((A + B) + C) + D) + ...), where the
+// bisection tree had (A + (B + (C + (D + ...)))). Domains are handed out in
+// id order, so the last to finish are the highest; in the bisection tree
+// every seam on their way to the root waited for them, down to the root's,
+// which seams the whole middle plane of the lattice. In the chain each
+// subtree joins the rest as soon as it is done, the seams along the big
+// planes run while workers are still busy with domains, and after the last
+// domain only the seams of the last few subtrees remain: the job's serial
+// tail, which also grows with the worker count, shrinks.
+struct TaskNode {
+    int first = 0;
+    int count = 1;
+    int left = -1;  // index of the child task, -1 for a leaf
+    int right = -1;
+};
+
+// The job's task tree for `decomposition`: root first, children after their
+// parent, leaf tasks in domain order (a lower task index is a lower domain).
+std::vector<TaskNode> task_tree(const Decomposition& decomposition);
 
 // The threads a task runs with: `count` to begin with and, where `more` is
 // set, what it offers before each reduction round (ReduceOptions::
@@ -90,8 +116,8 @@ public:
     const Lattice& lattice() const { return *lattice_; }
     const Decomposition& decomposition() const { return *decomposition_; }
     float level() const { return level_; }
-    int task_count() const { return static_cast<int>(decomposition_->tree().size()); }
-    const BisectionNode& node(int task) const { return decomposition_->tree()[static_cast<std::size_t>(task)]; }
+    int task_count() const { return static_cast<int>(tree_.size()); }
+    const TaskNode& node(int task) const { return tree_[static_cast<std::size_t>(task)]; }
     TaskKind kind(int task) const { return node(task).count == 1 ? TaskKind::domain : TaskKind::seam; }
     std::string describe(int task) const;
 
@@ -115,6 +141,7 @@ private:
     JobConfig config_;
     std::unique_ptr<Lattice> lattice_;
     std::unique_ptr<Decomposition> decomposition_;
+    std::vector<TaskNode> tree_;
     std::unique_ptr<Field> field_;
     float level_ = 0;
     ReduceOptions reduce_options_;
