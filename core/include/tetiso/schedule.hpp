@@ -44,7 +44,16 @@ enum class TaskKind : std::int32_t { domain = 0, seam = 1 };
 
 // One task of the job's tree: it covers domains [first, first + count); a
 // leaf (count 1) is one domain's task, an inner node seams its two
-// children's pieces.
+// children's pieces. Unlike a BisectionNode it need not cover a box.
+struct TaskNode {
+    int first = 0;
+    int count = 1;
+    int left = -1;  // index of the child task, -1 for a leaf
+    int right = -1;
+};
+
+// The job's task tree for `decomposition`: root first, children after their
+// parent, leaf tasks in domain order (a lower task index is a lower domain).
 //
 // The tree is the bisection tree (Decomposition::tree) with its rightmost
 // path turned into a chain that adds the subtrees hanging off that path one
@@ -56,16 +65,8 @@ enum class TaskKind : std::int32_t { domain = 0, seam = 1 };
 // subtree joins the rest as soon as it is done, the seams along the big
 // planes run while workers are still busy with domains, and after the last
 // domain only the seams of the last few subtrees remain: the job's serial
-// tail, which also grows with the worker count, shrinks.
-struct TaskNode {
-    int first = 0;
-    int count = 1;
-    int left = -1;  // index of the child task, -1 for a leaf
-    int right = -1;
-};
-
-// The job's task tree for `decomposition`: root first, children after their
-// parent, leaf tasks in domain order (a lower task index is a lower domain).
+// tail, which also grows with the worker count, shrinks (on the 16-core
+// device at N = 500 it halved: results/speedup/README.md, session 14).
 std::vector<TaskNode> task_tree(const Decomposition& decomposition);
 
 // The threads a task runs with: `count` to begin with and, where `more` is
