@@ -1533,6 +1533,7 @@ private:
         key_spare.resize(n);
         order.resize(n);
         order_spare.resize(n);
+        if (n == 0) return;
         parallel_for(threads, static_cast<i64>(n), [&](i64 i) {
             const auto k = static_cast<std::size_t>(i);
             order[k] = ops[k];
@@ -1553,7 +1554,6 @@ private:
                 for (std::size_t i = block_begin(static_cast<std::size_t>(b)); i < block_begin(static_cast<std::size_t>(b) + 1); ++i)
                     ++c[digit(key[i])];
             }, 0);
-            if (n == 0) return;
             std::size_t shared = 0;
             for (std::size_t b = 0; b < blocks; ++b) shared += count[b * kBuckets + digit(key[0])];
             if (shared == n) continue;
