@@ -29,7 +29,14 @@ void add_phi_option(CLI::App& cmd, double& phi) {
 nlohmann::json reduce_json(const ReduceReport& report) {
     nlohmann::json rounds = nlohmann::json::array();
     for (const ReduceRound& r : report.rounds)
-        rounds.push_back({{"round", r.round}, {"candidates", r.candidates}, {"evaluated", r.evaluated}, {"collapses", r.collapses}, {"flips", r.flips}});
+        rounds.push_back({{"round", r.round},
+                          {"vertices", r.vertices},
+                          {"triangles", r.triangles},
+                          {"candidates", r.candidates},
+                          {"evaluated", r.evaluated},
+                          {"collapses", r.collapses},
+                          {"flips", r.flips},
+                          {"changed_vertices", r.changed_vertices}});
     return {{"triangles_in", report.triangles_in},   {"triangles_out", report.triangles_out},
             {"vertices_in", report.vertices_in},     {"vertices_out", report.vertices_out},
             {"rounds", rounds},                      {"seconds", report.seconds},

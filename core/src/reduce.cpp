@@ -1866,6 +1866,8 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         st.propose += since(t0);
         ReduceRound stats;
         stats.round = round;
+        stats.vertices = static_cast<std::size_t>(s.vertices());
+        stats.triangles = static_cast<std::size_t>(s.triangles());
         t0 = now();
         // Collapses. The selection places a pending collapse (Φ, position)
         // only when it reaches it unblocked: most are blocked by a chosen
@@ -1928,6 +1930,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
                 evaluator.move_flip_samples(to_move[static_cast<std::size_t>(m)], samples.owner);
             });
         apply(s, fans, edges, ops, chosen, threads, vertex_alive, triangle_alive, changed);
+        for (std::size_t v = 0; v < changed.size(); ++v) stats.changed_vertices += changed[v] & vertex_alive[v];
         st.apply += since(t0);
         t0 = now();
         rep.rounds.push_back(stats);

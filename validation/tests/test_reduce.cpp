@@ -287,6 +287,45 @@ TEST(Reduce, PhiGatesEveryCollapseOutsideTheShortAndValenceThreeBranches) {
     EXPECT_EQ(report.rounds[0].flips, 0u);
 }
 
+TEST(Reduce, ReportRoundsAccountForEveryVertexAndTriangle) {
+    // Each collapse removes one vertex and the one or two faces of its edge
+    // (one on the border); a flip removes nothing. Operations are at least
+    // path length 2 apart, so their survivors and flip corners are distinct
+    // vertices whose fans change.
+    struct Surface {
+        const char* name;
+        Piece piece;
+        bool closed;
+    };
+    for (const Surface& c : {Surface{"open grid", grid(30), false},
+                             Surface{"closed torus", lattice_surface(40, 1, "torus"), true}}) {
+        ReduceReport report;
+        const Piece out = reduce(c.piece, {}, &report);
+        const auto& rounds = report.rounds;
+        ASSERT_GE(rounds.size(), 2u) << c.name;
+        EXPECT_EQ(rounds.front().vertices, c.piece.vertex_count()) << c.name;
+        EXPECT_EQ(rounds.front().triangles, c.piece.triangle_count()) << c.name;
+        std::size_t collapses = 0;
+        for (std::size_t r = 0; r < rounds.size(); ++r) {
+            const ReduceRound& x = rounds[r];
+            collapses += x.collapses;
+            const std::size_t vertices_after = r + 1 < rounds.size() ? rounds[r + 1].vertices : out.vertex_count();
+            const std::size_t triangles_after =
+                r + 1 < rounds.size() ? rounds[r + 1].triangles : out.triangle_count();
+            EXPECT_EQ(vertices_after, x.vertices - x.collapses) << c.name << " round " << r;
+            const std::size_t removed = x.triangles - triangles_after;
+            if (c.closed) {
+                EXPECT_EQ(removed, 2 * x.collapses) << c.name << " round " << r;
+            }
+            EXPECT_GE(removed, x.collapses) << c.name << " round " << r;
+            EXPECT_LE(removed, 2 * x.collapses) << c.name << " round " << r;
+            EXPECT_GE(x.changed_vertices, x.collapses + 4 * x.flips) << c.name << " round " << r;
+            EXPECT_LE(x.changed_vertices, x.vertices - x.collapses) << c.name << " round " << r;
+        }
+        EXPECT_GT(collapses, 0u) << c.name;
+    }
+}
+
 TEST(Reduce, FlatDiskCollapsesAndItsBorderStaysOnTheSquareWithItsCorners) {
     const Piece in = grid(40);
     ReduceReport report;

@@ -88,6 +88,13 @@ struct ReduceRound {
     std::size_t evaluated = 0;
     std::size_t collapses = 0;
     std::size_t flips = 0;
+    // The surface at the start of the round.
+    std::size_t vertices = 0;
+    std::size_t triangles = 0;
+    // Vertices that outlive the round and whose fan it altered (a face
+    // removed, rewritten or moved): what the next round's fans, edges and
+    // normals would have to redo if they were updated rather than rebuilt.
+    std::size_t changed_vertices = 0;
 };
 
 // Wall-clock seconds spent in each step of the rounds, summed over rounds
