@@ -44,7 +44,8 @@ def main():
         surviving = r["vertices"] - r["collapses"]
         share = 100.0 * r["changed_vertices"] / surviving if surviving else 0.0
         cells = [r["round"], r["vertices"], r["collapses"], r["flips"], r["changed_vertices"], f"{share:.1f} %"]
-        print("| " + " | ".join(str(c) for c in cells) + " |" if args.markdown else "  ".join(str(c) for c in cells))
+        text = [str(c) for c in cells]
+        print(("| " + " | ".join(text) + " |") if args.markdown else "  ".join(text))
     print(f"\nvertex fans rebuilt over {len(rounds)} rounds: {rebuilt} ({rebuilt / rounds[0]['vertices']:.2f}x the input's)")
     print(f"of which unchanged since the round before: {skippable} ({100.0 * skippable / rebuilt:.1f} %)")
 
