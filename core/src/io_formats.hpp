@@ -1,6 +1,7 @@
 // Internal: the format-specific readers and writers behind io.hpp.
 #pragma once
 
+#include <cmath>
 #include <filesystem>
 
 #include "tetiso/mesh.hpp"
@@ -11,6 +12,14 @@ void write_ply(const Piece& piece, const std::filesystem::path& path);
 Piece read_ply(const std::filesystem::path& path);
 void write_vtp(const Piece& piece, const std::filesystem::path& path);
 Piece read_vtp(const std::filesystem::path& path);
+
+// Whether a value read as a double is a whole number in [0, limit): the
+// readers hold every number as a double, and converting one that is not
+// (a fraction, a NaN, something out of range) to an integer type would be
+// undefined rather than an error.
+inline bool whole_below(double value, double limit) {
+    return value >= 0 && value < limit && value == std::floor(value);
+}
 
 // Checks indices and coordinates and restores the key order; shared by readers.
 void validate_and_order(Piece& piece, const std::filesystem::path& path);

@@ -227,15 +227,24 @@ private:
         piece.key.resize(n);
         piece.flags.assign(n, 0);
         std::vector<double> values(element.properties.size());
+        // Keys and flags must be whole numbers of their width; a float
+        // property or an ascii "2.5" or "nan" there is an error, not a guess.
+        auto integer = [&](std::size_t v, int property, double limit) {
+            const double value = values[static_cast<std::size_t>(property)];
+            if (!whole_below(value, limit))
+                fail("vertex " + std::to_string(v) + " has " + element.properties[static_cast<std::size_t>(property)].name +
+                     " " + std::to_string(value) + ", not a whole number below " + std::to_string(limit));
+            return value;
+        };
         for (std::size_t v = 0; v < n; ++v) {
             for (std::size_t p = 0; p < element.properties.size(); ++p) read_property(element, v, p, values[p]);
             piece.x[v] = static_cast<float>(values[static_cast<std::size_t>(x)]);
             piece.y[v] = static_cast<float>(values[static_cast<std::size_t>(y)]);
             piece.z[v] = static_cast<float>(values[static_cast<std::size_t>(z)]);
-            piece.key[v] = keyed ? (static_cast<EdgeKey>(values[static_cast<std::size_t>(key_hi)]) << 32) |
-                                       static_cast<EdgeKey>(values[static_cast<std::size_t>(key_lo)])
+            piece.key[v] = keyed ? (static_cast<EdgeKey>(integer(v, key_hi, 0x1p32)) << 32) |
+                                       static_cast<EdgeKey>(integer(v, key_lo, 0x1p32))
                                  : static_cast<EdgeKey>(v);
-            if (flags >= 0) piece.flags[v] = static_cast<std::uint8_t>(values[static_cast<std::size_t>(flags)]);
+            if (flags >= 0) piece.flags[v] = static_cast<std::uint8_t>(integer(v, flags, 256));
         }
     }
 
@@ -249,6 +258,8 @@ private:
         }
         double count = 0, ignored = 0;
         if (!next(property.count_type, count)) truncated(element, record);
+        if (!whole_below(count, 0x1p32))
+            fail(element.name + " " + std::to_string(record) + " has a list length that is not a count");
         for (double k = 0; k < count; ++k)
             if (!next(property.type, ignored)) truncated(element, record);
         value = count;
@@ -273,14 +284,16 @@ private:
                 }
                 double count = 0;
                 if (!next(property.count_type, count)) truncated(element, f);
-                if (count < 3) fail("face " + std::to_string(f) + " has fewer than 3 vertices");
+                if (!whole_below(count, 0x1p32) || count < 3)
+                    fail("face " + std::to_string(f) + " has " + std::to_string(count) +
+                         " vertices, not a whole number of at least 3");
                 polygon.clear();
                 for (double k = 0; k < count; ++k) {
                     double index = 0;
                     if (!next(property.type, index)) truncated(element, f);
-                    if (index < 0 || index > std::numeric_limits<std::int32_t>::max())
+                    if (!whole_below(index, 0x1p31))
                         fail("face " + std::to_string(f) + " has vertex index " + std::to_string(index) +
-                             " out of range");
+                             ", not a whole number in 32-bit range");
                     polygon.push_back(static_cast<std::int64_t>(index));
                 }
                 for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {

@@ -3,9 +3,11 @@
 // write and read, and still a standard VTK file. The reader accepts that form
 // with any of VTK's header and index widths; other encodings get a clear
 // error rather than a guess.
+#include <charconv>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <string>
@@ -131,14 +133,19 @@ Piece read_vtp(const std::filesystem::path& path) {
     if (header.find("<Piece ", piece_tag + 1) != std::string::npos)
         throw fail("more than one Piece; merge them before reading");
     const Attributes piece_attributes = parse_attributes(header.substr(piece_tag, header.find('>', piece_tag) - piece_tag));
+    // Counts and offsets are whole numbers that fit in 64 bits; anything
+    // else (a sign, a fraction, digits beyond 2^64) is an error, never a
+    // wrapped or truncated value.
+    auto parse_count = [&](const std::string& text, const std::string& what) -> std::size_t {
+        std::uint64_t value = 0;
+        const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+        if (error != std::errc{} || end != text.data() + text.size())
+            throw fail(what + " is not a count: \"" + text + "\"");
+        return static_cast<std::size_t>(value);
+    };
     auto count_of = [&](const char* name) -> std::size_t {
         const auto it = piece_attributes.find(name);
-        if (it == piece_attributes.end()) return 0;
-        try {
-            return std::stoull(it->second);
-        } catch (const std::exception&) {
-            throw fail(std::string("attribute ") + name + " is not a count");
-        }
+        return it == piece_attributes.end() ? 0 : parse_count(it->second, std::string("attribute ") + name);
     };
     const std::size_t n = count_of("NumberOfPoints"), m = count_of("NumberOfPolys");
 
@@ -146,7 +153,6 @@ Piece read_vtp(const std::filesystem::path& path) {
     struct Array {
         std::string type;
         std::size_t offset;
-        std::size_t components;
     };
     std::map<std::string, Array> arrays;
     std::string section;
@@ -161,9 +167,14 @@ Piece read_vtp(const std::filesystem::path& path) {
         if (!a.count("format") || a.at("format") != "appended")
             throw fail("DataArray in " + section + " is not in appended format");
         const std::string name = section == "Points" ? "Points" : a.count("Name") ? a.at("Name") : "";
-        arrays[section + "/" + name] =
-            Array{a.count("type") ? a.at("type") : "", a.count("offset") ? std::stoull(a.at("offset")) : 0,
-                  a.count("NumberOfComponents") ? std::stoull(a.at("NumberOfComponents")) : 1};
+        const std::string where = section + "/" + name;
+        const std::size_t components =
+            a.count("NumberOfComponents") ? parse_count(a.at("NumberOfComponents"), where + " NumberOfComponents") : 1;
+        if (components != (section == "Points" ? 3u : 1u))
+            throw fail(where + " has " + std::to_string(components) + " components, expected " +
+                       (section == "Points" ? "3" : "1"));
+        arrays[where] = Array{a.count("type") ? a.at("type") : "",
+                              a.count("offset") ? parse_count(a.at("offset"), where + " offset") : 0};
     }
     if (count_of("NumberOfStrips") || count_of("NumberOfLines") || count_of("NumberOfVerts"))
         throw fail("has strips, lines or vertices; only polygons are read");
@@ -172,12 +183,15 @@ Piece read_vtp(const std::filesystem::path& path) {
     // except 64-bit integers above 2^53, which keys use: they go through
     // read_u64).
     auto block = [&](const Array& array, std::size_t& bytes) -> const char* {
-        const std::size_t at = base + array.offset;
+        // Compared by what is left of the file, so that no offset or size
+        // read from it can wrap the sum around.
         const std::size_t header_size = wide_header ? 8 : 4;
-        if (at + header_size > text.size()) throw fail("appended data is shorter than its offsets say");
+        if (array.offset > text.size() - base || header_size > text.size() - base - array.offset)
+            throw fail("appended data is shorter than its offsets say");
+        const std::size_t at = base + array.offset;
         std::uint64_t size = 0;
         std::memcpy(&size, text.data() + at, header_size);
-        if (at + header_size + size > text.size()) throw fail("appended data is shorter than its sizes say");
+        if (size > text.size() - at - header_size) throw fail("appended data is shorter than its sizes say");
         bytes = static_cast<std::size_t>(size);
         return text.data() + at + header_size;
     };
@@ -190,7 +204,8 @@ Piece read_vtp(const std::filesystem::path& path) {
         const std::size_t width = type == "Float64" || type == "Int64" || type == "UInt64" ? 8
                                   : type == "Float32" || type == "Int32" || type == "UInt32" ? 4
                                   : type == "Int16" || type == "UInt16" ? 2 : 1;
-        if (bytes != expected * width)
+        // Divided rather than multiplied: `expected` comes from the file.
+        if (bytes % width != 0 || bytes / width != expected)
             throw fail(where + " holds " + std::to_string(bytes / width) + " values, expected " + std::to_string(expected));
         std::vector<double> out(expected);
         for (std::size_t i = 0; i < expected; ++i) {
@@ -210,6 +225,12 @@ Piece read_vtp(const std::filesystem::path& path) {
         }
         return out;
     };
+
+    // The counts bound what is allocated: a point takes at least 3 bytes and
+    // a polygon at least 4 (its offset and three corners) of the file.
+    if (n > text.size() / 3 || m > text.size() / 4) throw fail("NumberOfPoints or NumberOfPolys is more than the file can hold");
+    if (n > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+        throw fail("more points than 32-bit vertex indices can hold");
 
     Piece piece;
     const std::vector<double> points = values_of("Points/Points", 3 * n);
@@ -233,19 +254,29 @@ Piece read_vtp(const std::filesystem::path& path) {
     piece.flags.assign(n, 0);
     if (arrays.count("PointData/flags")) {
         const std::vector<double> flags = values_of("PointData/flags", n);
-        for (std::size_t v = 0; v < n; ++v) piece.flags[v] = static_cast<std::uint8_t>(flags[v]);
+        for (std::size_t v = 0; v < n; ++v) {
+            if (!whole_below(flags[v], 256)) throw fail("flags of vertex " + std::to_string(v) + " is not a byte");
+            piece.flags[v] = static_cast<std::uint8_t>(flags[v]);
+        }
     }
     const std::vector<double> offsets = values_of("Polys/offsets", m);
+    if (m > 0 && !whole_below(offsets.back(), static_cast<double>(text.size())))
+        throw fail("Polys/offsets ends at " + std::to_string(offsets.back()) + ", not a corner count the file can hold");
     const std::size_t corners = m == 0 ? 0 : static_cast<std::size_t>(offsets.back());
     const std::vector<double> connectivity = values_of("Polys/connectivity", corners);
-    double start = 0;
+    // The checks every reader applies (validate_and_order) see int32
+    // indices; here a corner must first be a whole number that fits one.
+    for (std::size_t c = 0; c < corners; ++c)
+        if (!whole_below(connectivity[c], static_cast<double>(n)))
+            throw fail("Polys/connectivity " + std::to_string(c) + " is " + std::to_string(connectivity[c]) +
+                       ", not a vertex index below " + std::to_string(n));
+    std::size_t start = 0;
     for (std::size_t f = 0; f < m; ++f) {
-        const double end = offsets[f];
-        if (end - start < 3 || end > static_cast<double>(corners))
+        if (!whole_below(offsets[f], static_cast<double>(corners + 1)) || offsets[f] < static_cast<double>(start + 3))
             throw fail("polygon " + std::to_string(f) + " has fewer than 3 vertices or bad offsets");
-        const auto first = static_cast<std::size_t>(start);
-        for (std::size_t k = first + 1; k + 1 < static_cast<std::size_t>(end); ++k) {
-            piece.triangles.push_back(static_cast<std::int32_t>(connectivity[first]));
+        const auto end = static_cast<std::size_t>(offsets[f]);
+        for (std::size_t k = start + 1; k + 1 < end; ++k) {
+            piece.triangles.push_back(static_cast<std::int32_t>(connectivity[start]));
             piece.triangles.push_back(static_cast<std::int32_t>(connectivity[k]));
             piece.triangles.push_back(static_cast<std::int32_t>(connectivity[k + 1]));
         }

@@ -125,13 +125,17 @@ Domain read_tetgen(const TetgenSource& source) {
         }
         const double x = node_file.get<double>(1, "x"), y = node_file.get<double>(2, "y"),
                      z = node_file.get<double>(3, "z");
-        if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) node_file.fail("a coordinate is not finite");
+        // Stored as float: a finite double beyond float's range would become
+        // an infinity there and spoil every crossing near it.
+        const auto representable = [](double value) { return std::abs(value) <= std::numeric_limits<float>::max(); };
+        if (!representable(x) || !representable(y) || !representable(z))
+            node_file.fail("a coordinate is not a finite number in float range");
         px.push_back(x);
         py.push_back(y);
         pz.push_back(z);
         if (source.attribute) {
             const double value = node_file.get<double>(4 + static_cast<std::size_t>(*source.attribute), "attribute");
-            if (!std::isfinite(value)) node_file.fail("the field value is not finite");
+            if (!representable(value)) node_file.fail("the field value is not a finite number in float range");
             domain.f.push_back(static_cast<float>(value));
         }
     }

@@ -92,6 +92,35 @@ TEST_F(Files, MalformedFilesGetErrorsNamingTheFile) {
                               "property float z\nend_header\nnan 0 0\n");
     EXPECT_FALSE(error_of(at("nan.ply")).empty());
 
+    // Numbers that would be undefined as integers: a fractional index, a
+    // NaN flag, a list length of -1.
+    const std::string ascii_head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                   "property float z\nproperty float flags\nelement face 1\n"
+                                   "property list int float vertex_indices\nend_header\n";
+    write_text(at("fraction.ply"), ascii_head + "0 0 0 0\n1 0 0 0\n0 1 0 0\n3 0 1 1.5\n");
+    EXPECT_NE(error_of(at("fraction.ply")).find("vertex index 1.5"), std::string::npos) << error_of(at("fraction.ply"));
+    write_text(at("flag.ply"), ascii_head + "0 0 0 nan\n1 0 0 0\n0 1 0 0\n3 0 1 2\n");
+    EXPECT_NE(error_of(at("flag.ply")).find("vertex 0 has flags nan"), std::string::npos) << error_of(at("flag.ply"));
+    write_text(at("length.ply"), ascii_head + "0 0 0 0\n1 0 0 0\n0 1 0 0\n-1 0 1 2\n");
+    EXPECT_NE(error_of(at("length.ply")).find("not a whole number of at least 3"), std::string::npos)
+        << error_of(at("length.ply"));
+
+    // VTP attributes that are not counts, and offsets past the end.
+    write_piece(extract(one.make_domain(0, *make_field("sphere")), 2.0f), at("good.vtp"));
+    std::ifstream vtp_in(at("good.vtp"), std::ios::binary);
+    const std::string vtp((std::istreambuf_iterator<char>(vtp_in)), std::istreambuf_iterator<char>());
+    const auto vtp_with = [&](const std::string& find, const std::string& replace) {
+        std::string text = vtp;
+        text.replace(text.find(find), find.size(), replace);
+        return text;
+    };
+    write_text(at("offset.vtp"), vtp_with("offset=\"0\"", "offset=\"zero\""));
+    EXPECT_NE(error_of(at("offset.vtp")).find("offset is not a count: \"zero\""), std::string::npos) << error_of(at("offset.vtp"));
+    write_text(at("far.vtp"), vtp_with("offset=\"0\"", "offset=\"18446744073709551615\""));
+    EXPECT_NE(error_of(at("far.vtp")).find("shorter than its offsets say"), std::string::npos) << error_of(at("far.vtp"));
+    write_text(at("points.vtp"), vtp_with("NumberOfPoints=\"", "NumberOfPoints=\"-"));
+    EXPECT_NE(error_of(at("points.vtp")).find("NumberOfPoints is not a count"), std::string::npos) << error_of(at("points.vtp"));
+
     write_text(at("text.vtp"), "<VTKFile type=\"UnstructuredGrid\"></VTKFile>");
     EXPECT_NE(error_of(at("text.vtp")).find("not a VTK XML PolyData"), std::string::npos);
     write_text(at("junk.ply"), "hello");

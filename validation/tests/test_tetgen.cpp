@@ -185,7 +185,8 @@ TEST(Tetgen, MalformedFilesAreNamedWithTheirLine) {
                          Case{".ele", "16251  4  0", "99999  4  0", "promises 99999 tetrahedra"},
                          Case{".ele", "16251  4  0", "16251  4  0\n1 1 2 3 9999", "node 9999, which does not exist"},
                          Case{".ele", "16251  4  0", "16251  4  0\n1 1 2 2 3", "repeats node 2"},
-                         Case{".node", "\n   1 ", "\n   1 nan", "not finite"}}) {
+                         Case{".node", "\n   1 ", "\n   1 nan", "not a finite number"},
+                         Case{".node", "\n   1 ", "\n   1 1e300 ", "not a finite number in float range"}}) {
         SCOPED_TRACE(c.message);
         const Scratch scratch;
         std::string text = scratch.read(c.ext);
