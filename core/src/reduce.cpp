@@ -210,52 +210,76 @@ struct Surface {
     bool locked(i32 v) const { return (flags[static_cast<std::size_t>(v)] & kLocked) != 0; }
 };
 
-// Error samples: the vertices of this call's input, frozen where they were.
-// Each is owned by one current triangle, the one of its region it was last
-// measured against; an operation re-measures the samples of every face it
-// replaces against the new faces, so the distance of each sample to the
-// reduced surface is known exactly (as an upper bound: the face found, not
-// necessarily the nearest) and never accumulates from round to round. base is
-// the sample's own bound from earlier calls (the largest error of its input
-// triangles): the only place where bounds add up is across calls, e.g. a
-// domain's reduction and then a seam's.
+// Error samples, frozen where this call's input had them. Each is owned by
+// one current triangle, the one of its region it was last measured against;
+// an operation re-measures the samples of every face it replaces against the
+// new faces, so the distance of each sample to the reduced surface is known
+// (as an upper bound: the face found, not necessarily the nearest) and never
+// accumulates from round to round.
+//
+// On a raw surface (an input without error bounds) a sample is one input
+// vertex, and the bound is exact at every one of them. On an input that was
+// reduced before (Piece::error set: a seam's region) the raw vertices are no
+// longer there, only the triangles that stand for them, each within its
+// error of every raw vertex it stands for: a sample is then one input
+// triangle, its three corners, with that error as base. Its distance to a
+// face is the largest of its corners', which bounds the distance of every
+// point of the triangle (distance to one triangle is convex), so
+// base + distance bounds the raw vertices it stands for. Vertex samples with
+// the largest error of their triangles as base would not: a raw vertex lies
+// near the inside of a triangle, which can stand farther from the new faces
+// than its corners do (up to 1.7x the bound over a job's seams on random
+// fields, test_random_fields). The only place where bounds add up is across
+// calls, e.g. a domain's reduction and then a seam's.
 struct Samples {
     struct Point {
         float x, y, z, base;
     };
     // Kept in the order of their owners, so the samples of triangle t are
-    // one run of point[] (its FaceGeometry's samples_begin .. samples_end,
-    // which sort() writes) and a test reads them as one run rather than
+    // one run (its FaceGeometry's samples_begin .. samples_end, which sort()
+    // writes; their points are corners times that) and a test reads them as one run rather than
     // one cache miss each (the loads of scattered samples were 4-5 % of a
     // profile of the paper surface's reduction; the selection step went from
     // 4.96 to 4.6 s with this order).
     // sort() restores the order at the start of every round; an operation
     // changes only owner[], which the positions stay in step with.
+    // corners consecutive points per sample (1 or 3), each with the
+    // sample's base.
     std::vector<Point> point;
-    std::vector<i32> owner; // triangle, per point
+    std::vector<i32> owner; // triangle, per sample
+    int corners = 1;
     bool enabled = false;
 
     bool on() const { return enabled; }
+    const Point* corners_of(std::size_t sample) const { return point.data() + sample * static_cast<std::size_t>(corners); }
 
-    // A vertex of no triangle is no sample: no operation can move it.
     void build(const Piece& in) {
-        const std::size_t nv = in.vertex_count(), nt = in.triangle_count();
-        std::vector<i32> first(nv, -1);
-        std::vector<float> base(nv, 0.0f);
-        for (std::size_t t = nt; t-- > 0;)
-            for (std::size_t r = 0; r < 3; ++r) {
-                const auto v = static_cast<std::size_t>(in.triangles[3 * t + r]);
-                first[v] = static_cast<i32>(t);
-                if (!in.error.empty()) base[v] = std::max(base[v], in.error[t]);
-            }
         point.clear();
         owner.clear();
+        enabled = true;
+        const std::size_t nv = in.vertex_count(), nt = in.triangle_count();
+        if (!in.error.empty()) {
+            corners = 3;
+            point.reserve(3 * nt);
+            for (std::size_t t = 0; t < nt; ++t) {
+                for (std::size_t r = 0; r < 3; ++r) {
+                    const auto v = static_cast<std::size_t>(in.triangles[3 * t + r]);
+                    point.push_back({in.x[v], in.y[v], in.z[v], in.error[t]});
+                }
+                owner.push_back(static_cast<i32>(t));
+            }
+            return;
+        }
+        // A vertex of no triangle is no sample: no operation can move it.
+        corners = 1;
+        std::vector<i32> first(nv, -1);
+        for (std::size_t t = nt; t-- > 0;)
+            for (std::size_t r = 0; r < 3; ++r) first[static_cast<std::size_t>(in.triangles[3 * t + r])] = static_cast<i32>(t);
         for (std::size_t v = 0; v < nv; ++v)
             if (first[v] >= 0) {
-                point.push_back({in.x[v], in.y[v], in.z[v], base[v]});
+                point.push_back({in.x[v], in.y[v], in.z[v], 0.0f});
                 owner.push_back(first[v]);
             }
-        enabled = true;
     }
 
     // Stable counting sort by owner; each face's range goes straight into
@@ -274,9 +298,10 @@ struct Samples {
         }
         sorted_point_.resize(point.size());
         sorted_owner_.resize(owner.size());
+        const auto k = static_cast<std::size_t>(corners);
         for (std::size_t i = 0; i < owner.size(); ++i) {
             const auto at = static_cast<std::size_t>(fill_[static_cast<std::size_t>(owner[i])]++);
-            sorted_point_[at] = point[i];
+            std::copy_n(point.begin() + static_cast<std::ptrdiff_t>(k * i), k, sorted_point_.begin() + static_cast<std::ptrdiff_t>(k * at));
             sorted_owner_[at] = owner[i];
         }
         point.swap(sorted_point_);
@@ -545,7 +570,7 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
 struct FaceGeometry {
     float nx, ny, nz, q;
     float err;
-    i32 samples_begin, samples_end; // Samples::point[begin .. end)
+    i32 samples_begin, samples_end; // samples [begin, end): Samples::corners_of
     i32 unused;
     Vec n() const { return {nx, ny, nz}; }
     // Below this quality a float normal is dominated by rounding.
@@ -1119,6 +1144,15 @@ private:
     // else on the nearest. Calls visit(sample, triangle) for each and raises
     // worst to each sample's bound; false when some sample has no new face
     // within max_error.
+    // A sample's distance to triangle (a, b, c): its point's, or the largest
+    // of its corners' (see Samples).
+    [[gnu::always_inline]] double sample_distance(const Samples::Point* p, Vec a, Vec b, Vec c) const {
+        double d = point_triangle_distance({p[0].x, p[0].y, p[0].z}, a, b, c);
+        for (int k = 1; k < samples_->corners; ++k)
+            d = std::max(d, point_triangle_distance({p[k].x, p[k].y, p[k].z}, a, b, c));
+        return d;
+    }
+
     template <class Visit>
     bool place_samples(const EdgeSlots& r, const NewFan& fan, double& worst, const Visit& visit) const {
         int replacement = 0;
@@ -1128,19 +1162,18 @@ private:
             const int own = removed ? -1 : replacement++;
             const FaceGeometry& g = geo_[t];
             for (i32 sample = g.samples_begin; sample < g.samples_end && placed; ++sample) {
-                const Samples::Point& sp = samples_->point[static_cast<std::size_t>(sample)];
-                const Vec q{sp.x, sp.y, sp.z};
-                const double base = sp.base;
+                const Samples::Point* sp = samples_->corners_of(static_cast<std::size_t>(sample));
+                const double base = sp->base;
                 int at = -1;
                 double d = 0.0;
                 if (own >= 0) {
-                    d = point_triangle_distance(q, fan.p, fan.a[own], fan.b[own]);
+                    d = sample_distance(sp, fan.p, fan.a[own], fan.b[own]);
                     if (base + d <= p_.max_error) at = own;
                 }
                 if (at < 0) {
                     d = std::numeric_limits<double>::infinity();
                     for (int f = 0; f < fan.n; ++f) {
-                        const double df = point_triangle_distance(q, fan.p, fan.a[f], fan.b[f]);
+                        const double df = sample_distance(sp, fan.p, fan.a[f], fan.b[f]);
                         if (df < d) {
                             d = df;
                             at = f;
@@ -1166,10 +1199,9 @@ private:
         const Vec pu = s_.pos(r.u), pw = s_.pos(r.w), pc = s_.pos(r.c), pd = s_.pos(r.d);
         for (const i32 t : {r.f1, r.f2})
             for (i32 sample = geo(t).samples_begin; sample < geo(t).samples_end; ++sample) {
-                const Samples::Point& sp = samples_->point[static_cast<std::size_t>(sample)];
-                const Vec q{sp.x, sp.y, sp.z};
-                const double d1 = point_triangle_distance(q, pc, pu, pd), d2 = point_triangle_distance(q, pd, pw, pc);
-                const double bound = sp.base + std::min(d1, d2);
+                const Samples::Point* sp = samples_->corners_of(static_cast<std::size_t>(sample));
+                const double d1 = sample_distance(sp, pc, pu, pd), d2 = sample_distance(sp, pd, pw, pc);
+                const double bound = sp->base + std::min(d1, d2);
                 if (!(bound <= p_.max_error)) return false;
                 worst = std::max(worst, bound);
                 visit(sample, d1 <= d2 ? r.f1 : r.f2, bound);

@@ -55,11 +55,14 @@ struct ReduceOptions {
     // of them (measured on the paper surface). Valid range [0, 30].
     double min_angle_degrees = 1.0;
     // Absolute bound on the distance from every vertex of the input to the
-    // reduced surface, plus that vertex's bound from earlier reductions (the
-    // input's Piece::error): every input vertex is tracked, so the bound is
-    // exact at them. Between input vertices the two surfaces can part
-    // further: on the built-in fields the sampled symmetric Hausdorff
-    // distance was 1.0-1.7 x max_error at 0.25 h and up to 2.4 x at 0.1 h
+    // reduced surface: every input vertex is tracked, so the bound is exact
+    // at them. An input reduced before (Piece::error set) stands for raw
+    // vertices it no longer has: then every point of each input triangle is
+    // tracked, its distance plus the triangle's error kept under the bound,
+    // so the bound holds at the raw vertices over any number of reductions.
+    // Between raw vertices the two surfaces can part further: on the
+    // built-in fields the sampled symmetric Hausdorff distance was
+    // 1.0-1.7 x max_error at 0.25 h and up to 2.4 x at 0.1 h
     // (results/reduce/bound_sweep.md).
     // <= 0 means no bound: Φ alone decides. For marching-tets surfaces 0.25 h
     // (h the lattice spacing) keeps the symmetric distance within 0.5 h.
