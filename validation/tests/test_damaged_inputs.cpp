@@ -19,7 +19,6 @@
 #include <random>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 
 #include "test_support.hpp"
 #include "tetiso/check.hpp"
@@ -103,13 +102,7 @@ std::string damage(std::string bytes, std::size_t text_end, std::mt19937_64& rng
 
 class DamagedInputs : public ::testing::Test {
 protected:
-    void SetUp() override {
-        directory_ = fs::temp_directory_path() / ("tetiso_damage_" + std::to_string(::getpid()) + "_" +
-                                                  ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(directory_);
-    }
-    void TearDown() override { fs::remove_all(directory_); }
-    fs::path at(const std::string& name) const { return directory_ / name; }
+    fs::path at(const std::string& name) const { return scratch_.at(name); }
 
     // Runs `read` on `cases` damaged copies of the files in `originals`
     // (one of them damaged per case, written under the same names) and
@@ -140,7 +133,7 @@ protected:
         EXPECT_GT(accepted, 0) << format;
     }
 
-    fs::path directory_;
+    test::ScratchDirectory scratch_{"tetiso_damage"};
 };
 
 // What every surface that reads must survive: the checker, and, for a

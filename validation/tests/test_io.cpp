@@ -15,15 +15,9 @@ namespace fs = std::filesystem;
 
 class Files : public ::testing::Test {
 protected:
-    void SetUp() override {
-        directory_ = fs::temp_directory_path() / ("tetiso_io_" + std::to_string(::getpid()) + "_" +
-                                                  ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(directory_);
-    }
-    void TearDown() override { fs::remove_all(directory_); }
-    fs::path at(const std::string& name) const { return directory_ / name; }
+    fs::path at(const std::string& name) const { return scratch_.at(name); }
     void write_text(const fs::path& path, const std::string& text) const { std::ofstream(path, std::ios::binary) << text; }
-    std::size_t files() const { return static_cast<std::size_t>(std::distance(fs::directory_iterator(directory_), fs::directory_iterator())); }
+    std::size_t files() const { return static_cast<std::size_t>(std::distance(fs::directory_iterator(scratch_.path()), fs::directory_iterator())); }
     std::string error_of(const fs::path& path) const {
         try {
             read_piece(path);
@@ -32,7 +26,7 @@ protected:
         }
         return "";
     }
-    fs::path directory_;
+    test::ScratchDirectory scratch_{"tetiso_io"};
 };
 
 TEST_F(Files, RoundTripsAreExact) {

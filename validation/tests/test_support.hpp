@@ -6,8 +6,12 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
+
+#include <gtest/gtest.h>
+#include <unistd.h>
 
 #include "tetiso/extract.hpp"
 #include "tetiso/field.hpp"
@@ -15,6 +19,27 @@
 #include "tetiso/seam.hpp"
 
 namespace tetiso::test {
+
+// A directory of its own for the running test (process id and test name, so
+// that CTest's parallel runs never share one), removed with everything in it
+// when the object goes.
+class ScratchDirectory {
+public:
+    explicit ScratchDirectory(const std::string& prefix)
+        : path_(std::filesystem::temp_directory_path() /
+                (prefix + "_" + std::to_string(::getpid()) + "_" +
+                 ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
+        std::filesystem::create_directories(path_);
+    }
+    ~ScratchDirectory() { std::filesystem::remove_all(path_); }
+    ScratchDirectory(const ScratchDirectory&) = delete;
+    ScratchDirectory& operator=(const ScratchDirectory&) = delete;
+    const std::filesystem::path& path() const { return path_; }
+    std::filesystem::path at(const std::string& name) const { return path_ / name; }
+
+private:
+    std::filesystem::path path_;
+};
 
 // Extracts every domain of an N-lattice split into D domains and merges the
 // pieces by key, as `tetiso extract` does.
