@@ -247,7 +247,7 @@ Piece read_vtp(const std::filesystem::path& path) {
         std::size_t bytes = 0;
         const char* data = block(it->second, bytes);
         if (bytes != n * 8) throw fail("key array has the wrong length");
-        std::memcpy(piece.key.data(), data, bytes);
+        if (bytes > 0) std::memcpy(piece.key.data(), data, bytes); // an empty vector's data() may be null
     } else {
         for (std::size_t v = 0; v < n; ++v) piece.key[v] = v;
     }
