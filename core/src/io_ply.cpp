@@ -233,7 +233,8 @@ private:
             const double value = values[static_cast<std::size_t>(property)];
             if (!whole_below(value, limit))
                 fail("vertex " + std::to_string(v) + " has " + element.properties[static_cast<std::size_t>(property)].name +
-                     " " + std::to_string(value) + ", not a whole number below " + std::to_string(limit));
+                     " " + std::to_string(value) + ", not a whole number below " +
+                     std::to_string(static_cast<std::uint64_t>(limit)));
             return value;
         };
         for (std::size_t v = 0; v < n; ++v) {

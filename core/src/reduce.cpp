@@ -235,16 +235,15 @@ struct Samples {
     struct Point {
         float x, y, z, base;
     };
-    // Kept in the order of their owners, so the samples of triangle t are
-    // one run (its FaceGeometry's samples_begin .. samples_end, which sort()
-    // writes; their points are corners times that) and a test reads them as one run rather than
-    // one cache miss each (the loads of scattered samples were 4-5 % of a
-    // profile of the paper surface's reduction; the selection step went from
-    // 4.96 to 4.6 s with this order).
-    // sort() restores the order at the start of every round; an operation
-    // changes only owner[], which the positions stay in step with.
-    // corners consecutive points per sample (1 or 3), each with the
-    // sample's base.
+    // `corners` consecutive points per sample (1 or 3), each with the
+    // sample's base. Kept in the order of their owners, so the samples of
+    // triangle t are one run (its FaceGeometry's samples_begin ..
+    // samples_end, which sort() writes) and a test reads them as one run
+    // rather than one cache miss each (the loads of scattered samples were
+    // 4-5 % of a profile of the paper surface's reduction; the selection step
+    // went from 4.96 to 4.6 s with this order). sort() restores the order at
+    // the start of every round; an operation changes only owner[], which the
+    // positions stay in step with.
     std::vector<Point> point;
     std::vector<i32> owner; // triangle, per sample
     int corners = 1;
@@ -1138,12 +1137,6 @@ private:
         int n = 0;
     };
 
-    // Places every sample of the old faces of both leaves of a collapse on a
-    // new face: on the face that replaces its own when that is within its
-    // room (the common case: a face that moves a little keeps its samples),
-    // else on the nearest. Calls visit(sample, triangle) for each and raises
-    // worst to each sample's bound; false when some sample has no new face
-    // within max_error.
     // A sample's distance to triangle (a, b, c): its point's, or the largest
     // of its corners' (see Samples).
     [[gnu::always_inline]] double sample_distance(const Samples::Point* p, Vec a, Vec b, Vec c) const {
@@ -1153,6 +1146,12 @@ private:
         return d;
     }
 
+    // Places every sample of the old faces of both leaves of a collapse on a
+    // new face: on the face that replaces its own when that is within its
+    // room (the common case: a face that moves a little keeps its samples),
+    // else on the nearest. Calls visit(sample, triangle) for each and raises
+    // worst to each sample's bound; false when some sample has no new face
+    // within max_error.
     template <class Visit>
     bool place_samples(const EdgeSlots& r, const NewFan& fan, double& worst, const Visit& visit) const {
         int replacement = 0;

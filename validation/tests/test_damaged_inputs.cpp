@@ -34,11 +34,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 void spill(const fs::path& path, const std::string& bytes) { std::ofstream(path, std::ios::binary) << bytes; }
 
 int case_count() {
@@ -157,7 +152,7 @@ std::size_t ply_header_end(const std::string& bytes) {
 TEST_F(DamagedInputs, PlyFilesAreReadOrRefused) {
     const Piece sphere = test::lattice_surface(8, 2, "sphere");
     write_piece(sphere, at("s.ply"));
-    const std::string binary = slurp(at("s.ply"));
+    const std::string binary = test::read_bytes(at("s.ply"));
     run("binary PLY", {{"s.ply", binary}}, ply_header_end, [&] { check_and_reduce(read_piece(at("s.ply"))); });
 
     // ASCII, double coordinates, quads: the paths other tools' files take.
@@ -178,7 +173,7 @@ TEST_F(DamagedInputs, PlyFilesAreReadOrRefused) {
 TEST_F(DamagedInputs, VtpFilesAreReadOrRefused) {
     const Piece torus = test::lattice_surface(10, 2, "torus");
     write_piece(torus, at("t.vtp"));
-    const std::string bytes = slurp(at("t.vtp"));
+    const std::string bytes = test::read_bytes(at("t.vtp"));
     run("VTP", {{"t.vtp", bytes}},
         [](const std::string& b) {
             const std::size_t end = b.find("<AppendedData");

@@ -66,8 +66,7 @@ TEST_F(Files, MalformedFilesGetErrorsNamingTheFile) {
     const Lattice lattice(8);
     const Decomposition one(lattice, 1);
     write_piece(extract(one.make_domain(0, *make_field("sphere")), 2.0f), at("good.ply"));
-    std::ifstream in(at("good.ply"), std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string bytes = test::read_bytes(at("good.ply"));
 
     write_text(at("cut.ply"), bytes.substr(0, bytes.size() - 7));
     EXPECT_NE(error_of(at("cut.ply")).find("cut.ply: file ends inside face"), std::string::npos) << error_of(at("cut.ply"));
@@ -101,8 +100,7 @@ TEST_F(Files, MalformedFilesGetErrorsNamingTheFile) {
 
     // VTP attributes that are not counts, and offsets past the end.
     write_piece(extract(one.make_domain(0, *make_field("sphere")), 2.0f), at("good.vtp"));
-    std::ifstream vtp_in(at("good.vtp"), std::ios::binary);
-    const std::string vtp((std::istreambuf_iterator<char>(vtp_in)), std::istreambuf_iterator<char>());
+    const std::string vtp = test::read_bytes(at("good.vtp"));
     const auto vtp_with = [&](const std::string& find, const std::string& replace) {
         std::string text = vtp;
         text.replace(text.find(find), find.size(), replace);

@@ -7,6 +7,8 @@
 #include <bit>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -19,6 +21,12 @@
 #include "tetiso/seam.hpp"
 
 namespace tetiso::test {
+
+// The whole file as bytes (empty if it cannot be read).
+inline std::string read_bytes(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
 
 // A directory of its own for the running test (process id and test name, so
 // that CTest's parallel runs never share one), removed with everything in it
