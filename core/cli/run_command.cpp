@@ -110,6 +110,7 @@ void run_job(const RunArguments& args) {
         {"reduce", c.reduce},
         {"phi", c.reduce_options.phi},
         {"max_error", c.reduce ? c.max_error_spacings * job.lattice().spacing() : 0.0},
+        {"sample_rings", c.sample_rings},
         {"ranks", mpi.size()},
         {"workers", std::max(1, mpi.size() - 1)},
         {"threads", c.threads},
@@ -149,6 +150,11 @@ void add_run_command(CLI::App& app, Command& run) {
     cmd->add_option("--max-error", job.max_error_spacings,
                     "Bound on the distance to the raw surface, in lattice spacings (0: none)")
         ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    cmd->add_option("--sample-rings", job.sample_rings,
+                    "Raw vertices each piece keeps for later seams: those of the triangles within this many "
+                    "edges of an open interface (-1: none; more reduces the seams further, at a cost in memory)")
+        ->check(CLI::Range(-1, 64))
         ->capture_default_str();
     cmd->add_flag("!--no-reduce", job.reduce, "Extract and seam only");
     cmd->add_option("--threads", job.threads, "Threads inside each task (0 = all cores)")

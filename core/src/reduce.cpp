@@ -218,19 +218,27 @@ struct Surface {
 // accumulates from round to round.
 //
 // On a raw surface (an input without error bounds) a sample is one input
-// vertex, and the bound is exact at every one of them. On an input that was
-// reduced before (Piece::error set: a seam's region) the raw vertices are no
-// longer there, only the triangles that stand for them, each within its
-// error of every raw vertex it stands for: a sample is then one input
-// triangle, its three corners, with that error as base. Its distance to a
-// face is the largest of its corners', which bounds the distance of every
-// point of the triangle (distance to one triangle is convex), so
-// base + distance bounds the raw vertices it stands for. Vertex samples with
-// the largest error of their triangles as base would not: a raw vertex lies
-// near the inside of a triangle, which can stand farther from the new faces
-// than its corners do (up to 1.7x the bound over a job's seams on random
-// fields, test_random_fields). The only place where bounds add up is across
-// calls, e.g. a domain's reduction and then a seam's.
+// vertex, and the bound is exact at every one of them. An input that was
+// reduced before (Piece::error set: a seam's region) may carry the raw
+// vertices of some triangles (Piece::sample_xyz, the triangles marked
+// sampled, which stand for exactly those): each is a sample again, with base
+// 0, so the bound stays exact there and a seam's reduction spends the whole
+// budget anew rather than what its domains left. Every other triangle stands
+// for raw vertices within its error of it, wherever they are: it is one
+// sample, its three corners with that error as base. Its distance to a face
+// is the largest of its corners', which bounds the distance of every point
+// of the triangle (distance to one triangle is convex), so base + distance
+// bounds the raw vertices it stands for. Vertex samples with the largest
+// error of their triangles as base would not: a raw vertex lies near the
+// inside of a triangle, which can stand farther from the new faces than its
+// corners do (up to 1.7x the bound over a job's seams on random fields,
+// test_random_fields). Bounds add up only across calls whose input lacks
+// the raw vertices, e.g. a seam's region beyond the samples a job keeps.
+//
+// The tag (Samples::shape) of a sample that is a raw vertex carried by the
+// input; its three points are the same.
+inline constexpr u8 kPointShape = 0xff;
+
 struct Samples {
     struct Point {
         float x, y, z, base;
@@ -246,6 +254,7 @@ struct Samples {
     // positions stay in step with.
     std::vector<Point> point;
     std::vector<i32> owner; // triangle, per sample
+    std::vector<u8> shape; // per sample, with corners == 3: kPointShape or 0 (a triangle)
     int corners = 1;
     bool enabled = false;
 
@@ -255,17 +264,26 @@ struct Samples {
     void build(const Piece& in) {
         point.clear();
         owner.clear();
+        shape.clear();
         enabled = true;
         const std::size_t nv = in.vertex_count(), nt = in.triangle_count();
         if (!in.error.empty()) {
             corners = 3;
-            point.reserve(3 * nt);
+            point.reserve(3 * (nt + in.sample_count()));
+            for (std::size_t i = 0; i < in.sample_count(); ++i) {
+                const Point p{in.sample_xyz[3 * i], in.sample_xyz[3 * i + 1], in.sample_xyz[3 * i + 2], 0.0f};
+                point.insert(point.end(), {p, p, p});
+                owner.push_back(in.sample_triangle[i]);
+                shape.push_back(kPointShape);
+            }
             for (std::size_t t = 0; t < nt; ++t) {
+                if (in.triangle_sampled(t)) continue;
                 for (std::size_t r = 0; r < 3; ++r) {
                     const auto v = static_cast<std::size_t>(in.triangles[3 * t + r]);
                     point.push_back({in.x[v], in.y[v], in.z[v], in.error[t]});
                 }
                 owner.push_back(static_cast<i32>(t));
+                shape.push_back(0);
             }
             return;
         }
@@ -297,20 +315,55 @@ struct Samples {
         }
         sorted_point_.resize(point.size());
         sorted_owner_.resize(owner.size());
+        sorted_shape_.resize(shape.size());
         const auto k = static_cast<std::size_t>(corners);
         for (std::size_t i = 0; i < owner.size(); ++i) {
             const auto at = static_cast<std::size_t>(fill_[static_cast<std::size_t>(owner[i])]++);
             std::copy_n(point.begin() + static_cast<std::ptrdiff_t>(k * i), k, sorted_point_.begin() + static_cast<std::ptrdiff_t>(k * at));
             sorted_owner_[at] = owner[i];
+            if (!shape.empty()) sorted_shape_[at] = shape[i];
         }
         point.swap(sorted_point_);
         owner.swap(sorted_owner_);
+        shape.swap(sorted_shape_);
+    }
+
+    // Writes the raw vertices among the samples into `out` (see
+    // ReduceOptions::keep_samples), grouped by triangle: those of every
+    // triangle that holds no sample that is a triangle, which is then marked
+    // sampled: it stands for exactly its samples.
+    void hand_on(Piece& out) const {
+        const std::size_t nt = out.triangle_count(), k = static_cast<std::size_t>(corners);
+        std::vector<u8> holds_triangle(nt, 0);
+        if (corners == 3)
+            for (std::size_t i = 0; i < owner.size(); ++i)
+                if (shape[i] != kPointShape) holds_triangle[static_cast<std::size_t>(owner[i])] = 1;
+        std::vector<i32> first(nt + 1, 0);
+        for (const i32 t : owner)
+            if (!holds_triangle[static_cast<std::size_t>(t)]) ++first[static_cast<std::size_t>(t) + 1];
+        for (std::size_t t = 0; t < nt; ++t) first[t + 1] += first[t];
+        out.sampled.resize(nt);
+        for (std::size_t t = 0; t < nt; ++t) out.sampled[t] = holds_triangle[t] ? 0 : 1;
+        out.sample_xyz.resize(3 * static_cast<std::size_t>(first[nt]));
+        out.sample_triangle.resize(static_cast<std::size_t>(first[nt]));
+        std::vector<i32> at(first.begin(), first.end() - 1);
+        for (std::size_t i = 0; i < owner.size(); ++i) {
+            const auto t = static_cast<std::size_t>(owner[i]);
+            if (holds_triangle[t]) continue;
+            const auto j = static_cast<std::size_t>(at[t]++);
+            const Point& p = point[k * i];
+            out.sample_xyz[3 * j] = p.x;
+            out.sample_xyz[3 * j + 1] = p.y;
+            out.sample_xyz[3 * j + 2] = p.z;
+            out.sample_triangle[j] = static_cast<i32>(t);
+        }
     }
 
 private:
     std::vector<i32> fill_;
     std::vector<Point> sorted_point_;
     std::vector<i32> sorted_owner_;
+    std::vector<u8> sorted_shape_;
 };
 
 std::string key_text(const Surface& s, i32 v) { return std::to_string(s.key[static_cast<std::size_t>(v)]); }
@@ -1139,10 +1192,10 @@ private:
 
     // A sample's distance to triangle (a, b, c): its point's, or the largest
     // of its corners' (see Samples).
-    [[gnu::always_inline]] double sample_distance(const Samples::Point* p, Vec a, Vec b, Vec c) const {
+    [[gnu::always_inline]] double sample_distance(i32 sample, const Samples::Point* p, Vec a, Vec b, Vec c) const {
         double d = point_triangle_distance({p[0].x, p[0].y, p[0].z}, a, b, c);
-        for (int k = 1; k < samples_->corners; ++k)
-            d = std::max(d, point_triangle_distance({p[k].x, p[k].y, p[k].z}, a, b, c));
+        if (samples_->corners == 1 || samples_->shape[static_cast<std::size_t>(sample)] == kPointShape) return d;
+        for (int k = 1; k < 3; ++k) d = std::max(d, point_triangle_distance({p[k].x, p[k].y, p[k].z}, a, b, c));
         return d;
     }
 
@@ -1166,13 +1219,13 @@ private:
                 int at = -1;
                 double d = 0.0;
                 if (own >= 0) {
-                    d = sample_distance(sp, fan.p, fan.a[own], fan.b[own]);
+                    d = sample_distance(sample, sp, fan.p, fan.a[own], fan.b[own]);
                     if (base + d <= p_.max_error) at = own;
                 }
                 if (at < 0) {
                     d = std::numeric_limits<double>::infinity();
                     for (int f = 0; f < fan.n; ++f) {
-                        const double df = sample_distance(sp, fan.p, fan.a[f], fan.b[f]);
+                        const double df = sample_distance(sample, sp, fan.p, fan.a[f], fan.b[f]);
                         if (df < d) {
                             d = df;
                             at = f;
@@ -1199,7 +1252,7 @@ private:
         for (const i32 t : {r.f1, r.f2})
             for (i32 sample = geo(t).samples_begin; sample < geo(t).samples_end; ++sample) {
                 const Samples::Point* sp = samples_->corners_of(static_cast<std::size_t>(sample));
-                const double d1 = sample_distance(sp, pc, pu, pd), d2 = sample_distance(sp, pd, pw, pc);
+                const double d1 = sample_distance(sample, sp, pc, pu, pd), d2 = sample_distance(sample, sp, pd, pw, pc);
                 const double bound = sp->base + std::min(d1, d2);
                 if (!(bound <= p_.max_error)) return false;
                 worst = std::max(worst, bound);
@@ -1645,6 +1698,24 @@ void check_input(const Piece& in) {
     for (std::size_t t = 0; t < in.error.size(); ++t)
         if (!(in.error[t] >= 0.0f && std::isfinite(in.error[t])))
             throw Error("tetiso::reduce: triangle " + std::to_string(t) + " has an error bound that is not a finite non-negative number");
+    if (in.sample_xyz.size() != 3 * in.sample_triangle.size())
+        throw Error("tetiso::reduce: sample_xyz is not three coordinates per sample_triangle");
+    if ((!in.sample_triangle.empty() || !in.sampled.empty()) && in.error.empty())
+        throw Error("tetiso::reduce: samples without error bounds (a raw surface's samples are its vertices)");
+    if (!in.sampled.empty() && in.sampled.size() != in.triangle_count())
+        throw Error("tetiso::reduce: sampled and triangles differ in length");
+    for (std::size_t i = 0; i < in.sample_count(); ++i) {
+        const i32 t = in.sample_triangle[i];
+        if (t < 0 || static_cast<std::size_t>(t) >= in.triangle_count())
+            throw Error("tetiso::reduce: sample " + std::to_string(i) + " refers to triangle " + std::to_string(t) +
+                        " of " + std::to_string(in.triangle_count()));
+        if (!in.triangle_sampled(static_cast<std::size_t>(t)))
+            throw Error("tetiso::reduce: sample " + std::to_string(i) + " is held by triangle " + std::to_string(t) +
+                        ", which is not marked sampled");
+        for (std::size_t c = 0; c < 3; ++c)
+            if (!std::isfinite(in.sample_xyz[3 * i + c]))
+                throw Error("tetiso::reduce: sample " + std::to_string(i) + " has a coordinate that is not finite");
+    }
     if (nv > static_cast<std::size_t>(std::numeric_limits<i32>::max() / 2) ||
         in.triangles.size() > static_cast<std::size_t>(std::numeric_limits<i32>::max() / 2))
         throw Error("tetiso::reduce: mesh too large for 32-bit indices");
@@ -1985,6 +2056,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     out.triangles = std::move(s.tri);
     out.error = std::move(s.err);
     out.domains = in.domains;
+    if (options.keep_samples && samples.on()) samples.hand_on(out);
     rep.triangles_out = out.triangle_count();
     rep.vertices_out = out.vertex_count();
     rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();

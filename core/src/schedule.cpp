@@ -105,7 +105,12 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
         } // the tetrahedra go before the reduction needs its memory
         record.stages.extract = lap();
         record.triangles_in = piece.triangle_count();
-        if (config_.reduce) piece = reduce(piece, reduce_options(threads));
+        if (config_.reduce) {
+            ReduceOptions options = reduce_options(threads);
+            options.keep_samples = true;
+            piece = reduce(piece, options);
+            keep_samples_near_locked(piece, config_.sample_rings);
+        }
         record.stages.reduce = lap();
         record.triangles_out = piece.triangle_count();
         return piece;
@@ -116,6 +121,7 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
     seam_options.reduce = config_.reduce;
     seam_options.reduce_options = reduce_options(threads);
     seam_options.rings = config_.seam_rings;
+    seam_options.sample_rings = config_.sample_rings;
     SeamReport seam_report;
     Piece piece = seam(*left, *right,
                        [this](GlobalId a, GlobalId b) { return decomposition_->domains_of_edge(a, b); },

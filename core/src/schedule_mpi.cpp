@@ -50,7 +50,8 @@ public:
     static std::size_t piece_size(const Piece& piece) {
         const auto array = [](const auto& v) { return sizeof(std::uint64_t) + v.size() * sizeof(v[0]); };
         return array(piece.x) + array(piece.y) + array(piece.z) + array(piece.key) + array(piece.flags) +
-               array(piece.triangles) + array(piece.domains) + array(piece.error);
+               array(piece.triangles) + array(piece.domains) + array(piece.error) + array(piece.sample_xyz) +
+               array(piece.sample_triangle) + array(piece.sampled);
     }
     void reserve(std::size_t more) { bytes.reserve(bytes.size() + more); }
     void put_piece(const Piece& piece) {
@@ -62,6 +63,9 @@ public:
         put_array(piece.triangles);
         put_array(piece.domains);
         put_array(piece.error);
+        put_array(piece.sample_xyz);
+        put_array(piece.sample_triangle);
+        put_array(piece.sampled);
     }
     std::vector<std::byte> bytes;
 
@@ -103,6 +107,9 @@ public:
         piece.triangles = get_array<std::int32_t>();
         piece.domains = get_array<int>();
         piece.error = get_array<float>();
+        piece.sample_xyz = get_array<float>();
+        piece.sample_triangle = get_array<std::int32_t>();
+        piece.sampled = get_array<std::uint8_t>();
         return piece;
     }
     std::string get_string() {

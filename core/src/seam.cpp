@@ -84,6 +84,16 @@ Piece merge_by_key(const Piece& a, const Piece& b) {
         for (const Piece* p : {&a, &b})
             for (std::size_t t = 0; t < p->triangle_count(); ++t) out.error.push_back(p->triangle_error(t));
     }
+    if (!a.sampled.empty() || !b.sampled.empty()) {
+        out.sampled.reserve(a.triangle_count() + b.triangle_count());
+        for (const Piece* p : {&a, &b})
+            for (std::size_t t = 0; t < p->triangle_count(); ++t) out.sampled.push_back(p->triangle_sampled(t) ? 1 : 0);
+    }
+    out.sample_xyz = a.sample_xyz;
+    out.sample_xyz.insert(out.sample_xyz.end(), b.sample_xyz.begin(), b.sample_xyz.end());
+    out.sample_triangle = a.sample_triangle;
+    const auto b_first = static_cast<std::int32_t>(a.triangle_count());
+    for (const std::int32_t t : b.sample_triangle) out.sample_triangle.push_back(b_first + t);
     std::merge(a.domains.begin(), a.domains.end(), b.domains.begin(), b.domains.end(),
                std::back_inserter(out.domains));
     return out;
@@ -176,24 +186,42 @@ std::vector<std::int32_t> pinched_vertices(const Piece& piece, const std::vector
     return pinched;
 }
 
-} // namespace
+// Each triangle's samples, as compressed rows.
+struct SamplesOf {
+    std::vector<std::int32_t> first; // triangle t's samples are list[first[t] .. first[t+1])
+    std::vector<std::int32_t> list;
+};
 
-Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, const SeamOptions& options,
-                  SeamReport* report) {
-    auto clock = std::chrono::steady_clock::now();
-    const std::size_t n = piece.vertex_count();
-    const Incidence around = incidence(piece);
+SamplesOf samples_of(const Piece& piece) {
+    SamplesOf out;
+    out.first.assign(piece.triangle_count() + 1, 0);
+    for (const std::int32_t t : piece.sample_triangle) ++out.first[static_cast<std::size_t>(t) + 1];
+    for (std::size_t t = 0; t < piece.triangle_count(); ++t) out.first[t + 1] += out.first[t];
+    out.list.resize(piece.sample_count());
+    std::vector<std::int32_t> cursor(out.first.begin(), out.first.end() - 1);
+    for (std::size_t i = 0; i < piece.sample_count(); ++i)
+        out.list[static_cast<std::size_t>(cursor[static_cast<std::size_t>(piece.sample_triangle[i])]++)] =
+            static_cast<std::int32_t>(i);
+    return out;
+}
 
-    // Vertices within `rings` edges of the seed, by breadth-first search.
-    std::vector<std::uint8_t> near(n, 0);
+// Appends sample i of `from` to `to`, held by triangle t.
+void append_sample(Piece& to, const Piece& from, std::size_t i, std::int32_t t) {
+    to.sample_xyz.insert(to.sample_xyz.end(), from.sample_xyz.begin() + static_cast<std::ptrdiff_t>(3 * i),
+                         from.sample_xyz.begin() + static_cast<std::ptrdiff_t>(3 * i + 3));
+    to.sample_triangle.push_back(t);
+}
+
+// Vertices within `rings` edges of the marked ones (marks set to 1 in
+// place), by breadth-first search; returns every vertex reached, the marked
+// ones first.
+std::vector<std::int32_t> grow(const Piece& piece, const Incidence& around, std::vector<std::uint8_t>& near,
+                               int rings) {
     std::vector<std::int32_t> frontier;
-    for (std::size_t v = 0; v < n; ++v)
-        if (seed[v]) {
-            near[v] = 1;
-            frontier.push_back(static_cast<std::int32_t>(v));
-        }
+    for (std::size_t v = 0; v < near.size(); ++v)
+        if (near[v]) frontier.push_back(static_cast<std::int32_t>(v));
     std::vector<std::int32_t> reached = frontier;
-    for (int ring = 0; ring < options.rings && !frontier.empty(); ++ring) {
+    for (int ring = 0; ring < rings && !frontier.empty(); ++ring) {
         std::vector<std::int32_t> next;
         for (const std::int32_t v : frontier)
             for (std::int32_t i = around.first[static_cast<std::size_t>(v)]; i < around.first[static_cast<std::size_t>(v) + 1]; ++i)
@@ -207,6 +235,49 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
         reached.insert(reached.end(), next.begin(), next.end());
         frontier = std::move(next);
     }
+    return reached;
+}
+
+} // namespace
+
+void keep_samples_near_locked(Piece& piece, int rings) {
+    if (piece.sampled.empty()) return;
+    std::vector<std::uint8_t> near(piece.vertex_count(), 0);
+    bool any = false;
+    for (std::size_t v = 0; v < piece.vertex_count(); ++v)
+        if (piece.flags[v] & kLocked) near[v] = 1, any = true;
+    if (!any || rings < 0) {
+        piece.sample_xyz = {};
+        piece.sample_triangle = {};
+        piece.sampled = {};
+        return;
+    }
+    grow(piece, incidence(piece), near, rings);
+    for (std::size_t t = 0; t < piece.triangle_count(); ++t)
+        if (!(near[static_cast<std::size_t>(piece.triangles[3 * t])] || near[static_cast<std::size_t>(piece.triangles[3 * t + 1])] ||
+              near[static_cast<std::size_t>(piece.triangles[3 * t + 2])]))
+            piece.sampled[t] = 0;
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < piece.sample_count(); ++i) {
+        if (!piece.sampled[static_cast<std::size_t>(piece.sample_triangle[i])]) continue;
+        for (std::size_t c = 0; c < 3; ++c) piece.sample_xyz[3 * kept + c] = piece.sample_xyz[3 * i + c];
+        piece.sample_triangle[kept++] = piece.sample_triangle[i];
+    }
+    piece.sample_xyz.resize(3 * kept);
+    piece.sample_triangle.resize(kept);
+    piece.sample_xyz.shrink_to_fit();
+    piece.sample_triangle.shrink_to_fit();
+}
+
+Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, const SeamOptions& options,
+                  SeamReport* report) {
+    auto clock = std::chrono::steady_clock::now();
+    const std::size_t n = piece.vertex_count();
+    const Incidence around = incidence(piece);
+
+    std::vector<std::uint8_t> near(n, 0);
+    for (std::size_t v = 0; v < n; ++v) near[v] = seed[v] ? 1 : 0;
+    const std::vector<std::int32_t> reached = grow(piece, around, near, options.rings);
 
     // The region: every triangle around a reached vertex, grown over pinched
     // rim vertices until it is a manifold with border.
@@ -254,15 +325,22 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
         sub.key.push_back(piece.key[v]);
         sub.flags.push_back(static_cast<std::uint8_t>(piece.flags[v] | (rim ? kLocked : 0)));
     }
-    for (const std::int32_t t : region) {
-        sub.error.push_back(piece.triangle_error(static_cast<std::size_t>(t)));
+    const SamplesOf held = samples_of(piece);
+    for (std::size_t r = 0; r < region.size(); ++r) {
+        const auto t = static_cast<std::size_t>(region[r]);
+        sub.error.push_back(piece.triangle_error(t));
+        if (!piece.sampled.empty()) sub.sampled.push_back(piece.sampled[t]);
         for (int k = 0; k < 3; ++k)
-            sub.triangles.push_back(local[static_cast<std::size_t>(piece.triangles[3 * static_cast<std::size_t>(t) + static_cast<std::size_t>(k)])]);
+            sub.triangles.push_back(local[static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>(k)])]);
+        for (std::int32_t j = held.first[t]; j < held.first[t + 1]; ++j)
+            append_sample(sub, piece, static_cast<std::size_t>(held.list[static_cast<std::size_t>(j)]), static_cast<std::int32_t>(r));
     }
 
     const double region_seconds = lap(clock);
     ReduceReport reduce_report;
-    const Piece reduced = reduce(sub, options.reduce_options, &reduce_report);
+    ReduceOptions reduce_options = options.reduce_options;
+    reduce_options.keep_samples = true;
+    const Piece reduced = reduce(sub, reduce_options, &reduce_report);
     const double reduce_seconds = lap(clock);
 
     // Splice: vertices of the sub-piece that the reduction removed are dropped,
@@ -298,13 +376,22 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
     out.error.reserve(piece.triangle_count());
     for (std::size_t t = 0; t < piece.triangle_count(); ++t)
         if (!in_region[t]) {
+            const auto to = static_cast<std::int32_t>(out.triangle_count());
             for (int k = 0; k < 3; ++k)
                 out.triangles.push_back(renumber[static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>(k)])]);
             out.error.push_back(piece.triangle_error(t));
+            out.sampled.push_back(piece.triangle_sampled(t) ? 1 : 0);
+            for (std::int32_t j = held.first[t]; j < held.first[t + 1]; ++j)
+                append_sample(out, piece, static_cast<std::size_t>(held.list[static_cast<std::size_t>(j)]), to);
         }
+    const auto reduced_first = static_cast<std::int32_t>(out.triangle_count());
     for (const std::int32_t v : reduced.triangles)
         out.triangles.push_back(renumber[static_cast<std::size_t>(from_reduced[static_cast<std::size_t>(v)])]);
     out.error.insert(out.error.end(), reduced.error.begin(), reduced.error.end());
+    for (std::size_t t = 0; t < reduced.triangle_count(); ++t) out.sampled.push_back(reduced.triangle_sampled(t) ? 1 : 0);
+    if (std::find(out.sampled.begin(), out.sampled.end(), 1) == out.sampled.end()) out.sampled = {};
+    for (std::size_t i = 0; i < reduced.sample_count(); ++i)
+        append_sample(out, reduced, i, reduced_first + reduced.sample_triangle[i]);
     if (report) {
         report->region_triangles = region.size();
         report->reduce = reduce_report;
@@ -329,7 +416,9 @@ Piece seam(const Piece& a, const Piece& b, const EdgeDomains& domains_of_edge, c
     if (!options.reduce || unlocked == 0) return merged;
     for (std::size_t v = 0; v < seed.size(); ++v)
         seed[v] = (seed[v] & kLocked) && !(merged.flags[v] & kLocked) ? 1 : 0;
-    return reduce_near(merged, seed, options, report);
+    Piece out = reduce_near(merged, seed, options, report);
+    keep_samples_near_locked(out, options.sample_rings);
+    return out;
 }
 
 } // namespace tetiso

@@ -589,6 +589,56 @@ TEST(Reduce, ErrorBoundHoldsOverRepeatedReductions) {
     EXPECT_LE(hausdorff(in, twice).symmetric, 0.5 * h);
 }
 
+TEST(Reduce, KeptSamplesAreTheRawVerticesAndLetALaterPassSpendTheBudgetAgain) {
+    // A reduction that hands on its samples (keep_samples) hands on every
+    // raw vertex once, each held by a triangle whose error bounds it. A
+    // second pass over that output measures the raw vertices themselves, so
+    // it may bring the surface anywhere within the bound of them: it reduces
+    // further than a pass that knows only the triangles' errors, and the
+    // bound still holds at every raw vertex.
+    const std::int64_t n = 60;
+    const double h = Lattice(n).spacing();
+    const Piece in = lattice_surface(n, 1, "paper");
+    const auto raw = test::referenced_positions(in);
+    ReduceOptions o;
+    o.max_error = 0.25 * h;
+    o.keep_samples = true;
+    const Piece once = reduce(in, o);
+    ASSERT_EQ(once.sampled.size(), once.triangle_count());
+    EXPECT_TRUE(std::all_of(once.sampled.begin(), once.sampled.end(), [](auto s) { return s == 1; }));
+    EXPECT_EQ(test::sample_positions(once), raw);
+    test::expect_samples_sound(once, raw, "once");
+
+    o.phi = 0.8; // a laxer criterion offers the second pass new collapses
+    const Piece twice = reduce(once, o);
+    Piece blind = once;
+    blind.sample_xyz.clear();
+    blind.sample_triangle.clear();
+    blind.sampled.clear();
+    const Piece twice_blind = reduce(blind, o);
+    expect_valid(in, twice, "reduced twice, with the raw vertices");
+    expect_valid(in, twice_blind, "reduced twice, with the errors only");
+    EXPECT_LE(vertex_distance(in, twice), o.max_error * (1 + 1e-5));
+    EXPECT_LE(vertex_distance(in, twice_blind), o.max_error * (1 + 1e-5));
+    EXPECT_LT(twice.triangle_count(), twice_blind.triangle_count());
+    EXPECT_EQ(test::sample_positions(twice), raw);
+    test::expect_samples_sound(twice, raw, "twice");
+    // Without samples in, every triangle holds a triangle of the input as
+    // its sample: none can be handed on as raw vertices.
+    EXPECT_EQ(twice_blind.sample_count(), 0u);
+
+    // Samples that do not fit the piece are refused, not used.
+    Piece bad = once;
+    bad.sample_triangle.front() = static_cast<std::int32_t>(bad.triangle_count());
+    EXPECT_THROW(reduce(bad, o), Error);
+    bad = once;
+    bad.sampled.assign(bad.triangle_count(), 0);
+    EXPECT_THROW(reduce(bad, o), Error);
+    bad = once;
+    bad.sample_xyz.pop_back();
+    EXPECT_THROW(reduce(bad, o), Error);
+}
+
 TEST(Reduce, SurfaceThroughMeshNodesIsCleanedUp) {
     // x = 2.5 is a plane of lattice nodes for odd N: marching tetrahedra puts
     // many vertices exactly on nodes, giving zero-length edges and

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <vector>
 
 #include "test_support.hpp"
 #include "tetiso/check.hpp"
@@ -175,6 +176,74 @@ TEST(Seam, ReductionAfterASeamStaysNearTheSeam) {
     EXPECT_TRUE(topology.manifold);
     EXPECT_TRUE(topology.oriented);
     EXPECT_TRUE(same_signatures(topology, check_topology(test::lattice_surface(40, 1, "gyroid"))));
+}
+
+TEST(Seam, RawSamplesTravelThroughTheSeamAndStayNearOpenInterfaces) {
+    // Four domains of the paper surface, reduced keeping their raw vertices
+    // near their interfaces. Seaming two of them re-measures those raw
+    // vertices near the seam: the result holds the bound at every raw vertex
+    // of both, reduces further than a seam that knows only the triangles'
+    // errors, and keeps samples only near the interfaces to the other two.
+    const Lattice lattice(48);
+    const Decomposition four(lattice, 4);
+    const auto field = make_field("paper");
+    ReduceOptions options;
+    options.max_error = 0.25 * lattice.spacing();
+    options.keep_samples = true;
+    const SeamOptions seam_options{true, options};
+    const int first = 0, second = four.neighbours(0).front();
+    std::vector<Piece> raw(2), reduced(2);
+    for (int k = 0; k < 2; ++k) {
+        raw[k] = extract(four.make_domain(k == 0 ? first : second, *field), 0.5f);
+        reduced[k] = reduce(raw[k], options);
+        EXPECT_EQ(reduced[k].sample_count(), test::referenced_positions(raw[k]).size());
+        keep_samples_near_locked(reduced[k], seam_options.sample_rings);
+        test::expect_samples_sound(reduced[k], test::referenced_positions(raw[k]), "domain");
+        // Every triangle at an interface keeps its raw vertices; some far
+        // from all of them do not.
+        std::size_t at_interface = 0, unsampled = 0;
+        for (std::size_t t = 0; t < reduced[k].triangle_count(); ++t) {
+            bool locked = false;
+            for (int c = 0; c < 3; ++c)
+                locked = locked || (reduced[k].flags[static_cast<std::size_t>(reduced[k].triangles[3 * t + static_cast<std::size_t>(c)])] & kLocked);
+            if (locked) {
+                ++at_interface;
+                EXPECT_TRUE(reduced[k].triangle_sampled(t)) << "triangle " << t;
+            }
+            unsampled += reduced[k].triangle_sampled(t) ? 0 : 1;
+        }
+        EXPECT_GT(at_interface, 0u);
+        EXPECT_GT(unsampled, 0u);
+    }
+    const EdgeDomains domains_of_edge = [&](GlobalId a, GlobalId b) { return four.domains_of_edge(a, b); };
+    const Piece joined = seam(reduced[0], reduced[1], domains_of_edge, seam_options);
+    std::vector<Piece> blind = reduced;
+    for (Piece& p : blind) {
+        p.sample_xyz.clear();
+        p.sample_triangle.clear();
+        p.sampled.clear();
+    }
+    const Piece joined_blind = seam(blind[0], blind[1], domains_of_edge, seam_options);
+
+    const Piece both_raw = merge_by_key(raw[0], raw[1]);
+    HausdorffOptions vertices;
+    vertices.vertices_only = true;
+    EXPECT_LE(hausdorff(both_raw, joined, vertices).forward, options.max_error * (1 + 1e-5));
+    EXPECT_LE(hausdorff(both_raw, joined_blind, vertices).forward, options.max_error * (1 + 1e-5));
+    EXPECT_LT(joined.triangle_count(), joined_blind.triangle_count());
+    test::expect_samples_sound(joined, test::referenced_positions(both_raw), "seam");
+    EXPECT_GT(joined.sample_count(), 0u); // the interfaces to the other two domains are still open
+    const TopologyReport topology = check_topology(joined);
+    EXPECT_TRUE(topology.manifold);
+    EXPECT_TRUE(topology.oriented);
+    EXPECT_TRUE(same_signatures(topology, check_topology(both_raw)));
+
+    // Once no interface is open no later seam can use them: all are dropped.
+    Piece closed = joined;
+    for (std::uint8_t& f : closed.flags) f = static_cast<std::uint8_t>(f & ~kLocked);
+    keep_samples_near_locked(closed, seam_options.sample_rings);
+    EXPECT_EQ(closed.sample_count(), 0u);
+    EXPECT_TRUE(closed.sampled.empty());
 }
 
 } // namespace

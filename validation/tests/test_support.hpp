@@ -93,6 +93,83 @@ inline bool same_surface(const Piece& a, const Piece& b) {
            a.flags == b.flags && canonical_triangles(a) == canonical_triangles(b);
 }
 
+// Distance from p to triangle (a, b, c), written here rather than taken from
+// the library so that the tests check it with a second implementation: the
+// plane's distance when p projects inside, else the nearest edge's.
+inline double point_triangle_distance(std::array<double, 3> p, std::array<double, 3> a, std::array<double, 3> b,
+                                      std::array<double, 3> c) {
+    auto sub = [](std::array<double, 3> u, std::array<double, 3> v) {
+        return std::array<double, 3>{u[0] - v[0], u[1] - v[1], u[2] - v[2]};
+    };
+    auto dot = [](std::array<double, 3> u, std::array<double, 3> v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
+    auto cross = [](std::array<double, 3> u, std::array<double, 3> v) {
+        return std::array<double, 3>{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    };
+    auto segment = [&](std::array<double, 3> u, std::array<double, 3> v) {
+        const auto uv = sub(v, u), up = sub(p, u);
+        const double len2 = dot(uv, uv);
+        const double t = len2 > 0 ? std::clamp(dot(up, uv) / len2, 0.0, 1.0) : 0.0;
+        const std::array<double, 3> q{u[0] + t * uv[0], u[1] + t * uv[1], u[2] + t * uv[2]};
+        const auto d = sub(p, q);
+        return std::sqrt(dot(d, d));
+    };
+    const auto n = cross(sub(b, a), sub(c, a));
+    const double n2 = dot(n, n);
+    if (n2 > 0) {
+        // Inside when p's projection lies on the inner side of all three edges.
+        const bool inside = dot(cross(sub(b, a), sub(p, a)), n) >= 0 && dot(cross(sub(c, b), sub(p, b)), n) >= 0 &&
+                            dot(cross(sub(a, c), sub(p, c)), n) >= 0;
+        if (inside) return std::abs(dot(sub(p, a), n)) / std::sqrt(n2);
+    }
+    return std::min({segment(a, b), segment(b, c), segment(c, a)});
+}
+
+// The positions of a piece's referenced vertices, sorted.
+inline std::vector<std::array<float, 3>> referenced_positions(const Piece& piece) {
+    std::vector<std::uint8_t> used(piece.vertex_count(), 0);
+    for (const std::int32_t v : piece.triangles) used[static_cast<std::size_t>(v)] = 1;
+    std::vector<std::array<float, 3>> out;
+    for (std::size_t v = 0; v < piece.vertex_count(); ++v)
+        if (used[v]) out.push_back({piece.x[v], piece.y[v], piece.z[v]});
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+// The positions of a piece's raw-vertex samples, sorted.
+inline std::vector<std::array<float, 3>> sample_positions(const Piece& piece) {
+    std::vector<std::array<float, 3>> out(piece.sample_count());
+    for (std::size_t i = 0; i < out.size(); ++i)
+        out[i] = {piece.sample_xyz[3 * i], piece.sample_xyz[3 * i + 1], piece.sample_xyz[3 * i + 2]};
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+// What Piece promises of its samples: each is one of the raw vertices
+// (`raw`, sorted), held by a triangle marked sampled, whose error bounds the
+// sample's distance to it.
+inline void expect_samples_sound(const Piece& piece, const std::vector<std::array<float, 3>>& raw,
+                                 const std::string& what) {
+    SCOPED_TRACE(what);
+    ASSERT_TRUE(piece.sampled.empty() || piece.sampled.size() == piece.triangle_count());
+    ASSERT_EQ(piece.sample_xyz.size(), 3 * piece.sample_count());
+    std::size_t unsound = 0, foreign = 0;
+    for (std::size_t i = 0; i < piece.sample_count(); ++i) {
+        const auto t = static_cast<std::size_t>(piece.sample_triangle[i]);
+        ASSERT_LT(t, piece.triangle_count());
+        ASSERT_TRUE(piece.triangle_sampled(t)) << "sample " << i << " of triangle " << t;
+        auto corner = [&](int k) {
+            const auto v = static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>(k)]);
+            return std::array<double, 3>{piece.x[v], piece.y[v], piece.z[v]};
+        };
+        const std::array<float, 3> q{piece.sample_xyz[3 * i], piece.sample_xyz[3 * i + 1], piece.sample_xyz[3 * i + 2]};
+        const double d = point_triangle_distance({q[0], q[1], q[2]}, corner(0), corner(1), corner(2));
+        unsound += d > piece.triangle_error(t) * (1 + 1e-5) + 1e-7 ? 1 : 0;
+        foreign += std::binary_search(raw.begin(), raw.end(), q) ? 0 : 1;
+    }
+    EXPECT_EQ(unsound, 0u) << "samples farther from their triangle than its error";
+    EXPECT_EQ(foreign, 0u) << "samples that are no raw vertex";
+}
+
 inline double area(const Piece& p) {
     double sum = 0;
     for (std::size_t t = 0; t < p.triangle_count(); ++t) {

@@ -71,9 +71,23 @@ struct Piece {
     // so a region reduced again after each seam spends what is left of one
     // budget for the whole job.
     std::vector<float> error;
+    // Raw isosurface vertices kept for a later reduction of their region (a
+    // seam's): sample_xyz holds three coordinates per sample and
+    // sample_triangle the triangle that stands for it. A triangle with
+    // sampled[t] set stands for exactly the samples it holds (none, maybe),
+    // and a reduction measures each again against its new faces, so the
+    // bound there is re-spent, not added to. Any other triangle stands for
+    // raw vertices within error[t] of it, wherever they are (its samples
+    // were dropped as too far from any interface still open). Only with
+    // `error` set; `sampled` empty means no triangle is.
+    std::vector<float> sample_xyz;
+    std::vector<std::int32_t> sample_triangle;
+    std::vector<std::uint8_t> sampled;
 
     std::size_t vertex_count() const { return key.size(); }
     std::size_t triangle_count() const { return triangles.size() / 3; }
+    std::size_t sample_count() const { return sample_triangle.size(); }
+    bool triangle_sampled(std::size_t t) const { return !sampled.empty() && sampled[t] != 0; }
     float triangle_error(std::size_t t) const { return error.empty() ? 0.0f : error[t]; }
 };
 

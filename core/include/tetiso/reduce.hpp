@@ -67,6 +67,12 @@ struct ReduceOptions {
     // <= 0 means no bound: Φ alone decides. For marching-tets surfaces 0.25 h
     // (h the lattice spacing) keeps the symmetric distance within 0.5 h.
     double max_error = 0.0;
+    // With max_error > 0: hand the samples on in the output
+    // (Piece::sample_xyz), those of every triangle that stands only for raw
+    // vertices, so that a later reduction of the same region (a seam's)
+    // measures the raw vertices again rather than adding its bound to this
+    // one's.
+    bool keep_samples = false;
     // No surviving triangle of a collapse may turn its normal by more than this.
     double max_normal_turn_degrees = 45.0;
     // An edge shorter than short_edge_ratio times the mean length of the other

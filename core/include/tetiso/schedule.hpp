@@ -23,6 +23,7 @@
 #include "tetiso/lattice.hpp"
 #include "tetiso/mesh.hpp"
 #include "tetiso/reduce.hpp"
+#include "tetiso/seam.hpp"
 
 namespace tetiso {
 
@@ -37,6 +38,9 @@ struct JobConfig {
     // spacings h (sets reduce_options.max_error); <= 0 leaves it as given.
     double max_error_spacings = 0.25;
     int seam_rings = 3;              // reach of the reduction after a seam
+    // Raw vertices each piece keeps for later seams (SeamOptions::sample_rings):
+    // more reduces the seams further and costs memory and messages; -1 keeps none.
+    int sample_rings = SeamOptions{}.sample_rings;
     int threads = 1;                 // threads inside one task
 };
 
