@@ -66,10 +66,11 @@ struct Piece {
     std::vector<int> domains;           // sorted ids of the domains this piece covers
     // Per triangle, or empty for all zero: the bound on the distance from the
     // raw isosurface's vertices that this triangle's region stands for to the
-    // surface. A reduction starts each of its input vertices from the largest
-    // bound of its triangles and keeps the sum under ReduceOptions::max_error,
-    // so a region reduced again after each seam spends what is left of one
-    // budget for the whole job.
+    // surface. A later reduction takes such a triangle whole as a sample,
+    // this bound as its base, and keeps base plus distance under
+    // ReduceOptions::max_error, so a region reduced again after a seam
+    // spends only what is left of one budget for the whole job; unless the
+    // triangle carries its raw vertices (below), which are measured anew.
     std::vector<float> error;
     // Raw isosurface vertices kept for a later reduction of their region (a
     // seam's): sample_xyz holds three coordinates per sample and
