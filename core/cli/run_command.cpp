@@ -39,6 +39,7 @@ nlohmann::json task_json(const TaskRecord& t) {
             {"end", t.end},
             {"triangles_in", t.triangles_in},
             {"triangles_out", t.triangles_out},
+            {"samples_out", t.samples_out},
             {"stage_seconds", stages}};
 }
 

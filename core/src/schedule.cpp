@@ -113,6 +113,7 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
         }
         record.stages.reduce = lap();
         record.triangles_out = piece.triangle_count();
+        record.samples_out = piece.sample_count();
         return piece;
     }
     if (!left || !right) throw Error("seam task " + std::to_string(task) + " lacks a piece");
@@ -131,6 +132,7 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
     record.stages.reduce = seam_report.seconds.reduce;
     record.stages.splice = seam_report.seconds.splice;
     record.triangles_out = piece.triangle_count();
+    record.samples_out = piece.sample_count();
     return piece;
 }
 

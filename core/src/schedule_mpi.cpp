@@ -71,9 +71,8 @@ public:
 
 private:
     void append(const void* data, std::size_t size) {
-        const std::size_t at = bytes.size();
-        bytes.resize(at + size);
-        if (size > 0) std::memcpy(bytes.data() + at, data, size);
+        const auto* first = static_cast<const std::byte*>(data);
+        bytes.insert(bytes.end(), first, first + size);
     }
 };
 
@@ -93,7 +92,8 @@ public:
         const auto n = get<std::uint64_t>();
         need(n * sizeof(T));
         std::vector<T> values(n);
-        std::memcpy(values.data(), bytes_.data() + at_, n * sizeof(T));
+        // An empty vector's data() may be null, which memcpy must not get.
+        if (n > 0) std::memcpy(values.data(), bytes_.data() + at_, n * sizeof(T));
         at_ += n * sizeof(T);
         return values;
     }
@@ -290,6 +290,7 @@ void work(const Job& job) {
             out.put<std::int32_t>(threads);
             out.put(record.triangles_in);
             out.put(record.triangles_out);
+            out.put(record.samples_out);
             out.put(record.stages);
             out.reserve(Packer::piece_size(piece));
             out.put_piece(piece);
@@ -471,6 +472,7 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
             const auto threads = in.get<std::int32_t>();
             record.triangles_in = in.get<std::uint64_t>();
             record.triangles_out = in.get<std::uint64_t>();
+            record.samples_out = in.get<std::uint64_t>();
             record.stages = in.get<TaskRecord::Stages>();
             const TaskNode& n = job.node(record.task);
             record.kind = job.kind(record.task);

@@ -82,6 +82,10 @@ for t in tasks:
 assert r["triangles"] < r["raw_triangles"]
 root = [t for t in tasks if t["domain_count"] == r["domains"]]
 assert len(root) == 1 and root[0]["rank"] == 0, root
+# Every domain touches an open interface and keeps raw vertices there for
+# its seams; the root has none left open and keeps none.
+assert all(t["samples_out"] > 0 for t in tasks if t["kind"] == "domain"), tasks
+assert root[0]["samples_out"] == 0, root
 for mine in (t for t in tasks if t["rank"] == 0):
     assert mine["kind"] == "seam", mine
     for other in tasks:

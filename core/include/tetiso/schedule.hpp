@@ -91,6 +91,9 @@ struct TaskRecord {
     double start = 0, end = 0;       // seconds since the job started, on rank 0's clock
     std::uint64_t triangles_in = 0;  // extracted triangles, or the two pieces' sum
     std::uint64_t triangles_out = 0;
+    // Raw vertices the result carries for later seams (Piece::sample_xyz):
+    // what --sample-rings costs in memory and messages, 16 bytes each.
+    std::uint64_t samples_out = 0;
     // Where a task's time went, on the rank that ran it: a domain's
     // generation, extraction and reduction; a seam's merge by key, region
     // near the seam, reduction and splice (SeamReport::Seconds).
