@@ -134,24 +134,28 @@ std::size_t unlock_settled(Piece& piece, const EdgeDomains& domains_of_edge) {
 namespace tetiso {
 namespace {
 
-// Triangles around each vertex, as compressed rows.
-struct Incidence {
-    std::vector<std::int32_t> first; // vertex v's triangles are list[first[v] .. first[v+1])
+// Compressed rows: row r lists list[first[r] .. first[r+1]).
+struct Rows {
+    std::vector<std::int32_t> first;
     std::vector<std::int32_t> list;
 };
 
-Incidence incidence(const Piece& piece) {
-    Incidence out;
-    out.first.assign(piece.vertex_count() + 1, 0);
-    for (const std::int32_t v : piece.triangles) ++out.first[static_cast<std::size_t>(v) + 1];
-    for (std::size_t v = 0; v < piece.vertex_count(); ++v) out.first[v + 1] += out.first[v];
-    out.list.resize(piece.triangles.size());
+// Groups entry i of `row_of` (a row index in [0, rows)) as i / per into its
+// row, by a counting sort, so each row lists its members in ascending order.
+Rows group_by(std::size_t rows, const std::vector<std::int32_t>& row_of, std::size_t per) {
+    Rows out;
+    out.first.assign(rows + 1, 0);
+    for (const std::int32_t r : row_of) ++out.first[static_cast<std::size_t>(r) + 1];
+    for (std::size_t r = 0; r < rows; ++r) out.first[r + 1] += out.first[r];
+    out.list.resize(row_of.size());
     std::vector<std::int32_t> cursor(out.first.begin(), out.first.end() - 1);
-    for (std::size_t c = 0; c < piece.triangles.size(); ++c)
-        out.list[static_cast<std::size_t>(cursor[static_cast<std::size_t>(piece.triangles[c])]++)] =
-            static_cast<std::int32_t>(c / 3);
+    for (std::size_t i = 0; i < row_of.size(); ++i)
+        out.list[static_cast<std::size_t>(cursor[static_cast<std::size_t>(row_of[i])]++)] = static_cast<std::int32_t>(i / per);
     return out;
 }
+
+// Triangles around each vertex.
+Rows incidence(const Piece& piece) { return group_by(piece.vertex_count(), piece.triangles, 3); }
 
 // Vertices of the region that would have more than one fan in it (more than
 // two region-border edges): the sub-piece must be a manifold for reduce().
@@ -186,24 +190,8 @@ std::vector<std::int32_t> pinched_vertices(const Piece& piece, const std::vector
     return pinched;
 }
 
-// Each triangle's samples, as compressed rows.
-struct SamplesOf {
-    std::vector<std::int32_t> first; // triangle t's samples are list[first[t] .. first[t+1])
-    std::vector<std::int32_t> list;
-};
-
-SamplesOf samples_of(const Piece& piece) {
-    SamplesOf out;
-    out.first.assign(piece.triangle_count() + 1, 0);
-    for (const std::int32_t t : piece.sample_triangle) ++out.first[static_cast<std::size_t>(t) + 1];
-    for (std::size_t t = 0; t < piece.triangle_count(); ++t) out.first[t + 1] += out.first[t];
-    out.list.resize(piece.sample_count());
-    std::vector<std::int32_t> cursor(out.first.begin(), out.first.end() - 1);
-    for (std::size_t i = 0; i < piece.sample_count(); ++i)
-        out.list[static_cast<std::size_t>(cursor[static_cast<std::size_t>(piece.sample_triangle[i])]++)] =
-            static_cast<std::int32_t>(i);
-    return out;
-}
+// Each triangle's samples.
+Rows samples_of(const Piece& piece) { return group_by(piece.triangle_count(), piece.sample_triangle, 1); }
 
 // Appends sample i of `from` to `to`, held by triangle t.
 void append_sample(Piece& to, const Piece& from, std::size_t i, std::int32_t t) {
@@ -215,7 +203,7 @@ void append_sample(Piece& to, const Piece& from, std::size_t i, std::int32_t t) 
 // Vertices within `rings` edges of the marked ones (marks set to 1 in
 // place), by breadth-first search; returns every vertex reached, the marked
 // ones first.
-std::vector<std::int32_t> grow(const Piece& piece, const Incidence& around, std::vector<std::uint8_t>& near,
+std::vector<std::int32_t> grow(const Piece& piece, const Rows& around, std::vector<std::uint8_t>& near,
                                int rings) {
     std::vector<std::int32_t> frontier;
     for (std::size_t v = 0; v < near.size(); ++v)
@@ -273,7 +261,7 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
                   SeamReport* report) {
     auto clock = std::chrono::steady_clock::now();
     const std::size_t n = piece.vertex_count();
-    const Incidence around = incidence(piece);
+    const Rows around = incidence(piece);
 
     std::vector<std::uint8_t> near(n, 0);
     for (std::size_t v = 0; v < n; ++v) near[v] = seed[v] ? 1 : 0;
@@ -325,7 +313,7 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
         sub.key.push_back(piece.key[v]);
         sub.flags.push_back(static_cast<std::uint8_t>(piece.flags[v] | (rim ? kLocked : 0)));
     }
-    const SamplesOf held = samples_of(piece);
+    const Rows held = samples_of(piece);
     for (std::size_t r = 0; r < region.size(); ++r) {
         const auto t = static_cast<std::size_t>(region[r]);
         sub.error.push_back(piece.triangle_error(t));
