@@ -234,61 +234,62 @@ struct Surface {
 // corners do (up to 1.7x the bound over a job's seams on random fields,
 // test_random_fields). Bounds add up only across calls whose input lacks
 // the raw vertices, e.g. a seam's region beyond the samples a job keeps.
-//
-// The tag (Samples::shape) of a sample that is a raw vertex carried by the
-// input; its three points are the same.
-inline constexpr u8 kPointShape = 0xff;
-
 struct Samples {
     struct Point {
         float x, y, z, base;
     };
-    // `corners` consecutive points per sample (1 or 3), each with the
-    // sample's base. Kept in the order of their owners, so the samples of
-    // triangle t are one run (its FaceGeometry's samples_begin ..
-    // samples_end, which sort() writes) and a test reads them as one run
-    // rather than one cache miss each (the loads of scattered samples were
-    // 4-5 % of a profile of the paper surface's reduction; the selection step
-    // went from 4.96 to 4.6 s with this order). sort() restores the order at
-    // the start of every round; an operation changes only owner[], which the
-    // positions stay in step with.
+    // One point per sample, with the sample's base: a raw vertex, or the
+    // first corner of a triangle sample, whose other two corners lie in
+    // far_point at 2 * far[sample] (far is -1 for a raw vertex, and empty
+    // when every sample is one). A seam's region holds mostly raw vertices,
+    // so they take one point, not three. Kept in the order of their owners,
+    // so the samples of triangle t are one run (its FaceGeometry's
+    // samples_begin .. samples_end, which sort() writes) and a test reads
+    // them as one run rather than one cache miss each (the loads of
+    // scattered samples were 4-5 % of a profile of the paper surface's
+    // reduction; the selection step went from 4.96 to 4.6 s with this
+    // order). sort() restores the order at the start of every round; an
+    // operation changes only owner[], which the points stay in step with.
+    // far_point is never reordered: triangle samples are few.
     std::vector<Point> point;
     std::vector<i32> owner; // triangle, per sample
-    std::vector<u8> shape; // per sample, with corners == 3: kPointShape or 0 (a triangle)
-    int corners = 1;
+    std::vector<i32> far;
+    std::vector<Point> far_point;
     bool enabled = false;
 
     bool on() const { return enabled; }
-    const Point* corners_of(std::size_t sample) const { return point.data() + sample * static_cast<std::size_t>(corners); }
+    const Point* point_of(std::size_t sample) const { return point.data() + sample; }
+    // The other two corners of a triangle sample, or null for a raw vertex.
+    const Point* far_corners(std::size_t sample) const {
+        return far.empty() || far[sample] < 0 ? nullptr : far_point.data() + 2 * static_cast<std::size_t>(far[sample]);
+    }
 
     void build(const Piece& in) {
         point.clear();
         owner.clear();
-        shape.clear();
+        far.clear();
+        far_point.clear();
         enabled = true;
         const std::size_t nv = in.vertex_count(), nt = in.triangle_count();
         if (!in.error.empty()) {
-            corners = 3;
-            point.reserve(3 * (nt + in.sample_count()));
+            point.reserve(nt + in.sample_count());
             for (std::size_t i = 0; i < in.sample_count(); ++i) {
-                const Point p{in.sample_xyz[3 * i], in.sample_xyz[3 * i + 1], in.sample_xyz[3 * i + 2], 0.0f};
-                point.insert(point.end(), {p, p, p});
+                point.push_back({in.sample_xyz[3 * i], in.sample_xyz[3 * i + 1], in.sample_xyz[3 * i + 2], 0.0f});
                 owner.push_back(in.sample_triangle[i]);
-                shape.push_back(kPointShape);
+                far.push_back(-1);
             }
             for (std::size_t t = 0; t < nt; ++t) {
                 if (in.triangle_sampled(t)) continue;
                 for (std::size_t r = 0; r < 3; ++r) {
                     const auto v = static_cast<std::size_t>(in.triangles[3 * t + r]);
-                    point.push_back({in.x[v], in.y[v], in.z[v], in.error[t]});
+                    (r == 0 ? point : far_point).push_back({in.x[v], in.y[v], in.z[v], in.error[t]});
                 }
                 owner.push_back(static_cast<i32>(t));
-                shape.push_back(0);
+                far.push_back(static_cast<i32>(far_point.size() / 2 - 1));
             }
             return;
         }
         // A vertex of no triangle is no sample: no operation can move it.
-        corners = 1;
         std::vector<i32> first(nv, -1);
         for (std::size_t t = nt; t-- > 0;)
             for (std::size_t r = 0; r < 3; ++r) first[static_cast<std::size_t>(in.triangles[3 * t + r])] = static_cast<i32>(t);
@@ -315,17 +316,16 @@ struct Samples {
         }
         sorted_point_.resize(point.size());
         sorted_owner_.resize(owner.size());
-        sorted_shape_.resize(shape.size());
-        const auto k = static_cast<std::size_t>(corners);
+        sorted_far_.resize(far.size());
         for (std::size_t i = 0; i < owner.size(); ++i) {
             const auto at = static_cast<std::size_t>(fill_[static_cast<std::size_t>(owner[i])]++);
-            std::copy_n(point.begin() + static_cast<std::ptrdiff_t>(k * i), k, sorted_point_.begin() + static_cast<std::ptrdiff_t>(k * at));
+            sorted_point_[at] = point[i];
             sorted_owner_[at] = owner[i];
-            if (!shape.empty()) sorted_shape_[at] = shape[i];
+            if (!far.empty()) sorted_far_[at] = far[i];
         }
         point.swap(sorted_point_);
         owner.swap(sorted_owner_);
-        shape.swap(sorted_shape_);
+        far.swap(sorted_far_);
     }
 
     // Writes the raw vertices among the samples into `out` (see
@@ -333,11 +333,10 @@ struct Samples {
     // triangle that holds no sample that is a triangle, which is then marked
     // sampled: it stands for exactly its samples.
     void hand_on(Piece& out) const {
-        const std::size_t nt = out.triangle_count(), k = static_cast<std::size_t>(corners);
+        const std::size_t nt = out.triangle_count();
         std::vector<u8> holds_triangle(nt, 0);
-        if (corners == 3)
-            for (std::size_t i = 0; i < owner.size(); ++i)
-                if (shape[i] != kPointShape) holds_triangle[static_cast<std::size_t>(owner[i])] = 1;
+        for (std::size_t i = 0; i < far.size(); ++i)
+            if (far[i] >= 0) holds_triangle[static_cast<std::size_t>(owner[i])] = 1;
         std::vector<i32> first(nt + 1, 0);
         for (const i32 t : owner)
             if (!holds_triangle[static_cast<std::size_t>(t)]) ++first[static_cast<std::size_t>(t) + 1];
@@ -351,10 +350,9 @@ struct Samples {
             const auto t = static_cast<std::size_t>(owner[i]);
             if (holds_triangle[t]) continue;
             const auto j = static_cast<std::size_t>(at[t]++);
-            const Point& p = point[k * i];
-            out.sample_xyz[3 * j] = p.x;
-            out.sample_xyz[3 * j + 1] = p.y;
-            out.sample_xyz[3 * j + 2] = p.z;
+            out.sample_xyz[3 * j] = point[i].x;
+            out.sample_xyz[3 * j + 1] = point[i].y;
+            out.sample_xyz[3 * j + 2] = point[i].z;
             out.sample_triangle[j] = static_cast<i32>(t);
         }
     }
@@ -363,7 +361,7 @@ private:
     std::vector<i32> fill_;
     std::vector<Point> sorted_point_;
     std::vector<i32> sorted_owner_;
-    std::vector<u8> sorted_shape_;
+    std::vector<i32> sorted_far_;
 };
 
 std::string key_text(const Surface& s, i32 v) { return std::to_string(s.key[static_cast<std::size_t>(v)]); }
@@ -622,7 +620,7 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
 struct FaceGeometry {
     float nx, ny, nz, q;
     float err;
-    i32 samples_begin, samples_end; // samples [begin, end): Samples::corners_of
+    i32 samples_begin, samples_end; // samples [begin, end): Samples::point_of
     i32 unused;
     Vec n() const { return {nx, ny, nz}; }
     // Below this quality a float normal is dominated by rounding.
@@ -1193,9 +1191,9 @@ private:
     // A sample's distance to triangle (a, b, c): its point's, or the largest
     // of its corners' (see Samples).
     [[gnu::always_inline]] double sample_distance(i32 sample, const Samples::Point* p, Vec a, Vec b, Vec c) const {
-        double d = point_triangle_distance({p[0].x, p[0].y, p[0].z}, a, b, c);
-        if (samples_->corners == 1 || samples_->shape[static_cast<std::size_t>(sample)] == kPointShape) return d;
-        for (int k = 1; k < 3; ++k) d = std::max(d, point_triangle_distance({p[k].x, p[k].y, p[k].z}, a, b, c));
+        double d = point_triangle_distance({p->x, p->y, p->z}, a, b, c);
+        if (const Samples::Point* q = samples_->far_corners(static_cast<std::size_t>(sample)))
+            for (int k = 0; k < 2; ++k) d = std::max(d, point_triangle_distance({q[k].x, q[k].y, q[k].z}, a, b, c));
         return d;
     }
 
@@ -1214,7 +1212,7 @@ private:
             const int own = removed ? -1 : replacement++;
             const FaceGeometry& g = geo_[t];
             for (i32 sample = g.samples_begin; sample < g.samples_end && placed; ++sample) {
-                const Samples::Point* sp = samples_->corners_of(static_cast<std::size_t>(sample));
+                const Samples::Point* sp = samples_->point_of(static_cast<std::size_t>(sample));
                 const double base = sp->base;
                 int at = -1;
                 double d = 0.0;
@@ -1251,7 +1249,7 @@ private:
         const Vec pu = s_.pos(r.u), pw = s_.pos(r.w), pc = s_.pos(r.c), pd = s_.pos(r.d);
         for (const i32 t : {r.f1, r.f2})
             for (i32 sample = geo(t).samples_begin; sample < geo(t).samples_end; ++sample) {
-                const Samples::Point* sp = samples_->corners_of(static_cast<std::size_t>(sample));
+                const Samples::Point* sp = samples_->point_of(static_cast<std::size_t>(sample));
                 const double d1 = sample_distance(sample, sp, pc, pu, pd), d2 = sample_distance(sample, sp, pd, pw, pc);
                 const double bound = sp->base + std::min(d1, d2);
                 if (!(bound <= p_.max_error)) return false;
