@@ -24,6 +24,11 @@ struct Block {
     std::size_t bytes;
 };
 
+// Each triangle's bound on the distance from the raw vertices it stands for
+// (Piece::error), as cell data: ParaView colours a surface by it, and
+// reading it back lets a later reduction spend only what is left.
+constexpr char kErrorBoundArray[] = "error_bound";
+
 // One XML start tag's attributes.
 using Attributes = std::map<std::string, std::string>;
 
@@ -48,6 +53,8 @@ Attributes parse_attributes(const std::string& tag) {
 } // namespace
 
 void write_vtp(const Piece& piece, const std::filesystem::path& path) {
+    if (!piece.error.empty() && piece.error.size() != piece.triangle_count())
+        throw Error(path.string() + ": error bounds and triangles differ in number");
     std::ofstream file(path, std::ios::binary | std::ios::trunc);
     if (!file) throw Error(path.string() + ": cannot open for writing");
     const std::size_t n = piece.vertex_count(), m = piece.triangle_count();
@@ -61,14 +68,18 @@ void write_vtp(const Piece& piece, const std::filesystem::path& path) {
     std::vector<std::int64_t> offsets(m);
     for (std::size_t t = 0; t < m; ++t) offsets[t] = static_cast<std::int64_t>(3 * (t + 1));
 
+    // The error bounds go last, and only when the piece has them.
+    const bool bounds = !piece.error.empty();
     const Block blocks[] = {{piece.key.data(), n * sizeof(EdgeKey)},
                             {piece.flags.data(), n},
                             {points.data(), points.size() * sizeof(float)},
                             {piece.triangles.data(), piece.triangles.size() * sizeof(std::int32_t)},
-                            {offsets.data(), offsets.size() * sizeof(std::int64_t)}};
-    std::size_t offset[5];
+                            {offsets.data(), offsets.size() * sizeof(std::int64_t)},
+                            {piece.error.data(), piece.error.size() * sizeof(float)}};
+    const int block_count = bounds ? 6 : 5;
+    std::size_t offset[6];
     std::size_t running = 0;
-    for (int b = 0; b < 5; ++b) {
+    for (int b = 0; b < block_count; ++b) {
         offset[b] = running;
         running += sizeof(std::uint64_t) + blocks[b].bytes;
     }
@@ -82,8 +93,13 @@ void write_vtp(const Piece& piece, const std::filesystem::path& path) {
          << offset[0] << "\"/>\n"
          << "        <DataArray type=\"UInt8\" Name=\"flags\" NumberOfComponents=\"1\" format=\"appended\" offset=\""
          << offset[1] << "\"/>\n"
-         << "      </PointData>\n"
-         << "      <Points>\n"
+         << "      </PointData>\n";
+    if (bounds)
+        file << "      <CellData>\n"
+             << "        <DataArray type=\"Float32\" Name=\"" << kErrorBoundArray
+             << "\" NumberOfComponents=\"1\" format=\"appended\" offset=\"" << offset[5] << "\"/>\n"
+             << "      </CellData>\n";
+    file << "      <Points>\n"
          << "        <DataArray type=\"Float32\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\""
          << offset[2] << "\"/>\n"
          << "      </Points>\n"
@@ -95,7 +111,8 @@ void write_vtp(const Piece& piece, const std::filesystem::path& path) {
          << "    </Piece>\n"
          << "  </PolyData>\n"
          << "  <AppendedData encoding=\"raw\">\n   _";
-    for (const Block& block : blocks) {
+    for (int b = 0; b < block_count; ++b) {
+        const Block& block = blocks[b];
         const std::uint64_t bytes = block.bytes;
         file.write(reinterpret_cast<const char*>(&bytes), sizeof bytes);
         if (block.bytes > 0) file.write(static_cast<const char*>(block.data), static_cast<std::streamsize>(block.bytes));
@@ -270,6 +287,15 @@ Piece read_vtp(const std::filesystem::path& path) {
         if (!whole_below(connectivity[c], static_cast<double>(n)))
             throw fail("Polys/connectivity " + std::to_string(c) + " is " + std::to_string(connectivity[c]) +
                        ", not a vertex index below " + std::to_string(n));
+    // A polygon's error bound holds for every triangle it is cut into.
+    std::vector<double> bounds;
+    if (arrays.count(std::string("CellData/") + kErrorBoundArray)) {
+        bounds = values_of(std::string("CellData/") + kErrorBoundArray, m);
+        for (std::size_t f = 0; f < m; ++f)
+            if (!(bounds[f] >= 0 && bounds[f] <= std::numeric_limits<float>::max()))
+                throw fail(std::string(kErrorBoundArray) + " of polygon " + std::to_string(f) +
+                           " is not a finite non-negative float");
+    }
     std::size_t start = 0;
     for (std::size_t f = 0; f < m; ++f) {
         if (!whole_below(offsets[f], static_cast<double>(corners + 1)) || offsets[f] < static_cast<double>(start + 3))
@@ -279,6 +305,7 @@ Piece read_vtp(const std::filesystem::path& path) {
             piece.triangles.push_back(static_cast<std::int32_t>(connectivity[start]));
             piece.triangles.push_back(static_cast<std::int32_t>(connectivity[k]));
             piece.triangles.push_back(static_cast<std::int32_t>(connectivity[k + 1]));
+            if (!bounds.empty()) piece.error.push_back(static_cast<float>(bounds[f]));
         }
         start = end;
     }

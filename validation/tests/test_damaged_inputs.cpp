@@ -171,7 +171,11 @@ TEST_F(DamagedInputs, PlyFilesAreReadOrRefused) {
 }
 
 TEST_F(DamagedInputs, VtpFilesAreReadOrRefused) {
-    const Piece torus = test::lattice_surface(10, 2, "torus");
+    // Reduced, so that it carries its triangles' error bounds (cell data).
+    ReduceOptions options;
+    options.max_error = 0.05;
+    const Piece torus = reduce(test::lattice_surface(10, 2, "torus"), options);
+    ASSERT_EQ(torus.error.size(), torus.triangle_count());
     write_piece(torus, at("t.vtp"));
     const std::string bytes = test::read_bytes(at("t.vtp"));
     run("VTP", {{"t.vtp", bytes}},

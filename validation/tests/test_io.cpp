@@ -43,6 +43,18 @@ TEST_F(Files, RoundTripsAreExact) {
         EXPECT_TRUE(test::same_bits(back.x, piece.x) && test::same_bits(back.y, piece.y) && test::same_bits(back.z, piece.z)) << name;
         EXPECT_EQ(back.triangles, piece.triangles) << name;
     }
+    // VTP keeps each triangle's error bound, PLY does not.
+    Piece bounded = piece;
+    bounded.error.resize(bounded.triangle_count());
+    for (std::size_t t = 0; t < bounded.error.size(); ++t) bounded.error[t] = 0.001f * static_cast<float>(t % 97);
+    write_piece(bounded, at("bounded.vtp"));
+    write_piece(bounded, at("bounded.ply"));
+    EXPECT_TRUE(test::same_bits(read_piece(at("bounded.vtp")).error, bounded.error));
+    EXPECT_TRUE(read_piece(at("bounded.ply")).error.empty());
+    bounded.error.pop_back();
+    EXPECT_THROW(write_piece(bounded, at("mismatched.vtp")), Error);
+    EXPECT_FALSE(std::filesystem::exists(at("mismatched.vtp")));
+
     const Piece empty;
     write_piece(empty, at("empty.vtp"));
     write_piece(empty, at("empty.ply"));
@@ -112,6 +124,13 @@ TEST_F(Files, MalformedFilesGetErrorsNamingTheFile) {
     EXPECT_NE(error_of(at("far.vtp")).find("shorter than its offsets say"), std::string::npos) << error_of(at("far.vtp"));
     write_text(at("points.vtp"), vtp_with("NumberOfPoints=\"", "NumberOfPoints=\"-"));
     EXPECT_NE(error_of(at("points.vtp")).find("NumberOfPoints is not a count"), std::string::npos) << error_of(at("points.vtp"));
+    Piece bad_bound = extract(one.make_domain(0, *make_field("sphere")), 2.0f);
+    bad_bound.error.assign(bad_bound.triangle_count(), 0.0f);
+    bad_bound.error[5] = -1.0f;
+    write_piece(bad_bound, at("bound.vtp"));
+    EXPECT_NE(error_of(at("bound.vtp")).find("bound.vtp: error_bound of polygon 5 is not a finite non-negative float"),
+              std::string::npos)
+        << error_of(at("bound.vtp"));
 
     write_text(at("text.vtp"), "<VTKFile type=\"UnstructuredGrid\"></VTKFile>");
     EXPECT_NE(error_of(at("text.vtp")).find("not a VTK XML PolyData"), std::string::npos);
