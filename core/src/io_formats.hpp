@@ -21,6 +21,12 @@ inline bool whole_below(double value, double limit) {
     return value >= 0 && value < limit && value == std::floor(value);
 }
 
+// The name both formats give each triangle's bound on the distance from the
+// raw vertices it stands for (Piece::error; a VTP cell array, a PLY face
+// property): ParaView colours a surface by it, and reading it back lets a
+// later reduction spend only what is left of the bound.
+inline constexpr char kErrorBoundName[] = "error_bound";
+
 // Checks indices and coordinates and restores the key order; shared by readers.
 void validate_and_order(Piece& piece, const std::filesystem::path& path);
 

@@ -1,5 +1,6 @@
 // PLY surfaces. Writing: binary little-endian with tetiso's vertex key and
-// flags as extra properties. Reading: ascii and binary of either byte order,
+// flags as extra properties, and each face's error bound where the piece has
+// them. Reading: ascii and binary of either byte order,
 // any scalar types, other elements and properties skipped, polygons fanned.
 // No count in the header is trusted before the file is known to hold it.
 #include <algorithm>
@@ -267,17 +268,28 @@ private:
     }
 
     void read_faces(const Element& element, Piece& piece) {
-        int indices = -1;
-        for (std::size_t p = 0; p < element.properties.size(); ++p)
+        int indices = -1, bound = -1;
+        for (std::size_t p = 0; p < element.properties.size(); ++p) {
             if (element.properties[p].is_list &&
                 (element.properties[p].name == "vertex_indices" || element.properties[p].name == "vertex_index"))
                 indices = static_cast<int>(p);
+            if (!element.properties[p].is_list && element.properties[p].name == kErrorBoundName)
+                bound = static_cast<int>(p);
+        }
         if (indices < 0) fail("face element has no vertex_indices list");
         piece.triangles.reserve(static_cast<std::size_t>(element.count) * 3);
         std::vector<std::int64_t> polygon;
         for (std::uint64_t f = 0; f < element.count; ++f) {
+            double face_bound = 0;
             for (std::size_t p = 0; p < element.properties.size(); ++p) {
                 const Property& property = element.properties[p];
+                if (static_cast<int>(p) == bound) {
+                    read_property(element, f, p, face_bound);
+                    if (!(face_bound >= 0 && face_bound <= std::numeric_limits<float>::max()))
+                        fail("face " + std::to_string(f) + " has " + kErrorBoundName + " " +
+                             std::to_string(face_bound) + ", not a finite non-negative float");
+                    continue;
+                }
                 if (static_cast<int>(p) != indices) {
                     double ignored;
                     read_property(element, f, p, ignored);
@@ -303,6 +315,8 @@ private:
                     piece.triangles.push_back(static_cast<std::int32_t>(polygon[k + 1]));
                 }
             }
+            // A polygon's bound holds for every triangle it is cut into.
+            if (bound >= 0) piece.error.resize(piece.triangle_count(), static_cast<float>(face_bound));
         }
     }
 
@@ -323,6 +337,9 @@ private:
 } // namespace
 
 void write_ply(const Piece& piece, const std::filesystem::path& path) {
+    const bool bounds = !piece.error.empty();
+    if (bounds && piece.error.size() != piece.triangle_count())
+        throw Error(path.string() + ": error bounds and triangles differ in number");
     std::ofstream file(path, std::ios::binary | std::ios::trunc);
     if (!file) throw Error(path.string() + ": cannot open for writing");
     file << "ply\nformat binary_little_endian 1.0\ncomment written by tetiso\n"
@@ -330,7 +347,9 @@ void write_ply(const Piece& piece, const std::filesystem::path& path) {
          << "property float x\nproperty float y\nproperty float z\n"
          << "property uint key_hi\nproperty uint key_lo\nproperty uchar flags\n"
          << "element face " << piece.triangle_count() << "\n"
-         << "property list uchar int vertex_indices\nend_header\n";
+         << "property list uchar int vertex_indices\n"
+         << (bounds ? std::string("property float ") + kErrorBoundName + "\n" : std::string())
+         << "end_header\n";
 
     constexpr std::size_t kVertexBytes = 3 * 4 + 2 * 4 + 1;
     constexpr std::size_t kFaceBytes = 1 + 3 * 4;
@@ -362,6 +381,7 @@ void write_ply(const Piece& piece, const std::filesystem::path& path) {
     for (std::size_t t = 0; t < piece.triangle_count(); ++t) {
         put(&three, 1);
         put(&piece.triangles[3 * t], 12);
+        if (bounds) put(&piece.error[t], 4);
         static_assert(kFaceBytes == 13);
         flush_if_full();
     }

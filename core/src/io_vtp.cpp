@@ -24,11 +24,6 @@ struct Block {
     std::size_t bytes;
 };
 
-// Each triangle's bound on the distance from the raw vertices it stands for
-// (Piece::error), as cell data: ParaView colours a surface by it, and
-// reading it back lets a later reduction spend only what is left.
-constexpr char kErrorBoundArray[] = "error_bound";
-
 // One XML start tag's attributes.
 using Attributes = std::map<std::string, std::string>;
 
@@ -96,7 +91,7 @@ void write_vtp(const Piece& piece, const std::filesystem::path& path) {
          << "      </PointData>\n";
     if (bounds)
         file << "      <CellData>\n"
-             << "        <DataArray type=\"Float32\" Name=\"" << kErrorBoundArray
+             << "        <DataArray type=\"Float32\" Name=\"" << kErrorBoundName
              << "\" NumberOfComponents=\"1\" format=\"appended\" offset=\"" << offset[5] << "\"/>\n"
              << "      </CellData>\n";
     file << "      <Points>\n"
@@ -289,11 +284,11 @@ Piece read_vtp(const std::filesystem::path& path) {
                        ", not a vertex index below " + std::to_string(n));
     // A polygon's error bound holds for every triangle it is cut into.
     std::vector<double> bounds;
-    if (arrays.count(std::string("CellData/") + kErrorBoundArray)) {
-        bounds = values_of(std::string("CellData/") + kErrorBoundArray, m);
+    if (arrays.count(std::string("CellData/") + kErrorBoundName)) {
+        bounds = values_of(std::string("CellData/") + kErrorBoundName, m);
         for (std::size_t f = 0; f < m; ++f)
             if (!(bounds[f] >= 0 && bounds[f] <= std::numeric_limits<float>::max()))
-                throw fail(std::string(kErrorBoundArray) + " of polygon " + std::to_string(f) +
+                throw fail(std::string(kErrorBoundName) + " of polygon " + std::to_string(f) +
                            " is not a finite non-negative float");
     }
     std::size_t start = 0;

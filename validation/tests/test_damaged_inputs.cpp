@@ -150,7 +150,11 @@ std::size_t ply_header_end(const std::string& bytes) {
 }
 
 TEST_F(DamagedInputs, PlyFilesAreReadOrRefused) {
-    const Piece sphere = test::lattice_surface(8, 2, "sphere");
+    // Reduced, so that it carries its triangles' error bounds (a face property).
+    ReduceOptions options;
+    options.max_error = 0.05;
+    const Piece sphere = reduce(test::lattice_surface(8, 2, "sphere"), options);
+    ASSERT_EQ(sphere.error.size(), sphere.triangle_count());
     write_piece(sphere, at("s.ply"));
     const std::string binary = test::read_bytes(at("s.ply"));
     run("binary PLY", {{"s.ply", binary}}, ply_header_end, [&] { check_and_reduce(read_piece(at("s.ply"))); });

@@ -43,17 +43,23 @@ TEST_F(Files, RoundTripsAreExact) {
         EXPECT_TRUE(test::same_bits(back.x, piece.x) && test::same_bits(back.y, piece.y) && test::same_bits(back.z, piece.z)) << name;
         EXPECT_EQ(back.triangles, piece.triangles) << name;
     }
-    // VTP keeps each triangle's error bound, PLY does not.
+    // Both keep each triangle's error bound, bit for bit; a piece without
+    // bounds reads back without them.
     Piece bounded = piece;
     bounded.error.resize(bounded.triangle_count());
     for (std::size_t t = 0; t < bounded.error.size(); ++t) bounded.error[t] = 0.001f * static_cast<float>(t % 97);
-    write_piece(bounded, at("bounded.vtp"));
-    write_piece(bounded, at("bounded.ply"));
-    EXPECT_TRUE(test::same_bits(read_piece(at("bounded.vtp")).error, bounded.error));
-    EXPECT_TRUE(read_piece(at("bounded.ply")).error.empty());
+    for (const char* name : {"bounded.vtp", "bounded.ply"}) {
+        write_piece(bounded, at(name));
+        const Piece back = read_piece(at(name));
+        EXPECT_TRUE(test::same_bits(back.error, bounded.error)) << name;
+        EXPECT_EQ(back.triangles, bounded.triangles) << name;
+        EXPECT_TRUE(read_piece(at(std::string("s") + std::filesystem::path(name).extension().string())).error.empty()) << name;
+    }
     bounded.error.pop_back();
-    EXPECT_THROW(write_piece(bounded, at("mismatched.vtp")), Error);
-    EXPECT_FALSE(std::filesystem::exists(at("mismatched.vtp")));
+    for (const char* name : {"mismatched.vtp", "mismatched.ply"}) {
+        EXPECT_THROW(write_piece(bounded, at(name)), Error) << name;
+        EXPECT_FALSE(std::filesystem::exists(at(name))) << name;
+    }
 
     const Piece empty;
     write_piece(empty, at("empty.vtp"));
@@ -131,6 +137,10 @@ TEST_F(Files, MalformedFilesGetErrorsNamingTheFile) {
     EXPECT_NE(error_of(at("bound.vtp")).find("bound.vtp: error_bound of polygon 5 is not a finite non-negative float"),
               std::string::npos)
         << error_of(at("bound.vtp"));
+    write_piece(bad_bound, at("bound.ply"));
+    EXPECT_NE(error_of(at("bound.ply")).find("bound.ply: face 5 has error_bound -1.000000, not a finite non-negative float"),
+              std::string::npos)
+        << error_of(at("bound.ply"));
 
     write_text(at("text.vtp"), "<VTKFile type=\"UnstructuredGrid\"></VTKFile>");
     EXPECT_NE(error_of(at("text.vtp")).find("not a VTK XML PolyData"), std::string::npos);

@@ -22,9 +22,10 @@ SurfaceFormat surface_format(const std::filesystem::path& path);
 
 // Throws tetiso::Error naming the path if it cannot be written; in that case
 // nothing is left at `path` (an earlier file there is kept unchanged). Both
-// formats hold positions, keys, flags and triangles; VTP also each
-// triangle's error bound (Piece::error, cell array "error_bound"), which
-// reads back so that a later reduction spends only what is left of it.
+// formats hold positions, keys, flags, triangles and, where the piece has
+// them, each triangle's error bound (Piece::error: a VTP cell array or a PLY
+// face property named "error_bound"), which reads back so that a later
+// reduction spends only what is left of it.
 void write_piece(const Piece& piece, const std::filesystem::path& path);
 
 // Reads a surface written by tetiso or, for PLY, by other tools (ascii or
