@@ -1,6 +1,8 @@
 // `tetiso reduce`: reduce a surface file with the paper's Φ criterion, keeping
 // its topology and its locked vertices.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "commands.hpp"
 #include "tetiso/error.hpp"
@@ -68,6 +70,17 @@ void run_reduce(const ReduceArguments& args) {
     // Without a lattice spacing to relate to, bound the error by a fraction
     // of the input's own edge length (marching-tets edges are about 0.6 h).
     options.max_error = args.max_error.value_or(kAutoErrorPerEdgeLength * mean_edge_length(input));
+    // A file written by a reduction carries each triangle's bound on its
+    // distance from the raw surface; one already past the bound asked for
+    // can only stay as it is, which a user would otherwise not see.
+    if (options.max_error > 0) {
+        const auto over = std::count_if(input.error.begin(), input.error.end(),
+                                        [&](float e) { return e > options.max_error; });
+        if (over > 0)
+            std::fprintf(stderr, "tetiso: note: %lld triangles of %s already carry an error bound above --max-error %g; "
+                                 "they can only stay as they are\n",
+                         static_cast<long long>(over), args.input.string().c_str(), options.max_error);
+    }
     ReduceReport report;
     const Piece output = reduce(input, options, &report);
     write_piece(output, args.output);
@@ -94,7 +107,9 @@ void add_reduce_command(CLI::App& app, Command& run) {
     add_phi_option(*cmd, args->options.phi);
     cmd->add_option_function<double>(
            "--max-error", [args](double e) { args->max_error = e; },
-           "Bound on the distance to the input surface, absolute (0: none; default: 0.4 x mean edge length)")
+           "Bound on the distance to the input surface, absolute (0: none; default: 0.4 x mean edge length); "
+           "for an input that carries error_bound (a reduction's output), on the distance to the raw surface it "
+           "stands for")
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--threads", args->options.threads, "Threads (0 = all cores); output does not depend on it")
         ->check(CLI::NonNegativeNumber)

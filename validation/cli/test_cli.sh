@@ -60,6 +60,16 @@ else
     echo "FAIL: level outside the range"; failures=$((failures + 1))
 fi
 
+# A reduction's output carries its bounds: reducing it again under a tighter
+# bound leaves the triangles already past it as they are, says so, exit 0.
+"$tetiso" run --lattice 20 --domains 4 --field sphere --quiet -o "$work/bounded.vtp" &&
+    "$tetiso" reduce "$work/bounded.vtp" --max-error 1e-6 -o "$work/again.vtp" 2>"$work/stderr"
+if [ $? -eq 0 ] && grep -q "already carry an error bound above --max-error" "$work/stderr" && [ -s "$work/again.vtp" ]; then
+    passed=$((passed + 1))
+else
+    echo "FAIL: reduce of a bounded surface under a tighter bound"; failures=$((failures + 1))
+fi
+
 # The report holds what the issue asks for, and the surface checks out.
 "$tetiso" extract --lattice 30 --domains 8 --field sphere -o "$work/s.ply" --report "$work/r.json" &&
 python3 - "$work/r.json" <<'PY'
