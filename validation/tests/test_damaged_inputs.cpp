@@ -144,16 +144,22 @@ void check_and_reduce(const Piece& piece) {
     EXPECT_TRUE(same_signatures(before, after));
 }
 
+// A lattice surface of two domains, reduced so that its files carry each
+// triangle's error bound (a PLY face property, a VTP cell array) for the
+// damage to reach.
+Piece bounded_surface(std::int64_t n, const std::string& field) {
+    ReduceOptions options;
+    options.max_error = 0.05;
+    return reduce(test::lattice_surface(n, 2, field), options);
+}
+
 std::size_t ply_header_end(const std::string& bytes) {
     const std::size_t end = bytes.find("end_header");
     return end == std::string::npos ? bytes.size() : end;
 }
 
 TEST_F(DamagedInputs, PlyFilesAreReadOrRefused) {
-    // Reduced, so that it carries its triangles' error bounds (a face property).
-    ReduceOptions options;
-    options.max_error = 0.05;
-    const Piece sphere = reduce(test::lattice_surface(8, 2, "sphere"), options);
+    const Piece sphere = bounded_surface(8, "sphere");
     ASSERT_EQ(sphere.error.size(), sphere.triangle_count());
     write_piece(sphere, at("s.ply"));
     const std::string binary = test::read_bytes(at("s.ply"));
@@ -175,10 +181,7 @@ TEST_F(DamagedInputs, PlyFilesAreReadOrRefused) {
 }
 
 TEST_F(DamagedInputs, VtpFilesAreReadOrRefused) {
-    // Reduced, so that it carries its triangles' error bounds (cell data).
-    ReduceOptions options;
-    options.max_error = 0.05;
-    const Piece torus = reduce(test::lattice_surface(10, 2, "torus"), options);
+    const Piece torus = bounded_surface(10, "torus");
     ASSERT_EQ(torus.error.size(), torus.triangle_count());
     write_piece(torus, at("t.vtp"));
     const std::string bytes = test::read_bytes(at("t.vtp"));
