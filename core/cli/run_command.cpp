@@ -111,6 +111,7 @@ void run_job(const RunArguments& args) {
         {"reduce", c.reduce},
         {"phi", c.reduce_options.phi},
         {"max_error", c.reduce ? c.max_error_spacings * job.lattice().spacing() : 0.0},
+        {"seam_rings", c.seam_rings},
         {"sample_rings", c.sample_rings},
         {"ranks", mpi.size()},
         {"workers", std::max(1, mpi.size() - 1)},
@@ -151,6 +152,10 @@ void add_run_command(CLI::App& app, Command& run) {
     cmd->add_option("--max-error", job.max_error_spacings,
                     "Bound on the distance to the raw surface, in lattice spacings (0: none)")
         ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    cmd->add_option("--seam-rings", job.seam_rings,
+                    "How far from a seam its reduction reaches, in edges (the rest of the pieces is left as it is)")
+        ->check(CLI::Range(0, 64))
         ->capture_default_str();
     cmd->add_option("--sample-rings", job.sample_rings,
                     "Raw vertices each piece keeps for later seams: those of the triangles within this many "

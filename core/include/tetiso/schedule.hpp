@@ -37,7 +37,7 @@ struct JobConfig {
     // Bound on the reduction's distance to the raw surface, in lattice
     // spacings h (sets reduce_options.max_error); <= 0 leaves it as given.
     double max_error_spacings = 0.25;
-    int seam_rings = 3;              // reach of the reduction after a seam
+    int seam_rings = SeamOptions{}.rings; // reach of the reduction after a seam
     // Raw vertices each piece keeps for later seams (SeamOptions::sample_rings):
     // more reduces the seams further and costs memory and messages; -1 keeps none.
     int sample_rings = SeamOptions{}.sample_rings;
