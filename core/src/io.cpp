@@ -49,6 +49,9 @@ SurfaceFormat surface_format(const std::filesystem::path& path) {
 
 void write_piece(const Piece& piece, const std::filesystem::path& path) {
     const SurfaceFormat format = surface_format(path);
+    // Both writers lay the bounds out one per triangle.
+    if (!piece.error.empty() && piece.error.size() != piece.triangle_count())
+        throw Error(path.string() + ": error bounds and triangles differ in number");
     write_atomically(path, [&](const std::filesystem::path& temporary) {
         if (format == SurfaceFormat::ply)
             detail::write_ply(piece, temporary);

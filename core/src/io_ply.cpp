@@ -338,8 +338,6 @@ private:
 
 void write_ply(const Piece& piece, const std::filesystem::path& path) {
     const bool bounds = !piece.error.empty();
-    if (bounds && piece.error.size() != piece.triangle_count())
-        throw Error(path.string() + ": error bounds and triangles differ in number");
     std::ofstream file(path, std::ios::binary | std::ios::trunc);
     if (!file) throw Error(path.string() + ": cannot open for writing");
     file << "ply\nformat binary_little_endian 1.0\ncomment written by tetiso\n"

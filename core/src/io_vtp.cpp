@@ -48,8 +48,6 @@ Attributes parse_attributes(const std::string& tag) {
 } // namespace
 
 void write_vtp(const Piece& piece, const std::filesystem::path& path) {
-    if (!piece.error.empty() && piece.error.size() != piece.triangle_count())
-        throw Error(path.string() + ": error bounds and triangles differ in number");
     std::ofstream file(path, std::ios::binary | std::ios::trunc);
     if (!file) throw Error(path.string() + ": cannot open for writing");
     const std::size_t n = piece.vertex_count(), m = piece.triangle_count();

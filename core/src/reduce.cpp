@@ -1190,7 +1190,8 @@ private:
 
     // A sample's distance to triangle (a, b, c): its point's, or the largest
     // of its corners' (see Samples).
-    [[gnu::always_inline]] double sample_distance(i32 sample, const Samples::Point* p, Vec a, Vec b, Vec c) const {
+    [[gnu::always_inline]] double sample_distance(i32 sample, Vec a, Vec b, Vec c) const {
+        const Samples::Point* p = samples_->point_of(static_cast<std::size_t>(sample));
         double d = point_triangle_distance({p->x, p->y, p->z}, a, b, c);
         if (const Samples::Point* q = samples_->far_corners(static_cast<std::size_t>(sample)))
             for (int k = 0; k < 2; ++k) d = std::max(d, point_triangle_distance({q[k].x, q[k].y, q[k].z}, a, b, c));
@@ -1217,13 +1218,13 @@ private:
                 int at = -1;
                 double d = 0.0;
                 if (own >= 0) {
-                    d = sample_distance(sample, sp, fan.p, fan.a[own], fan.b[own]);
+                    d = sample_distance(sample, fan.p, fan.a[own], fan.b[own]);
                     if (base + d <= p_.max_error) at = own;
                 }
                 if (at < 0) {
                     d = std::numeric_limits<double>::infinity();
                     for (int f = 0; f < fan.n; ++f) {
-                        const double df = sample_distance(sample, sp, fan.p, fan.a[f], fan.b[f]);
+                        const double df = sample_distance(sample, fan.p, fan.a[f], fan.b[f]);
                         if (df < d) {
                             d = df;
                             at = f;
@@ -1250,7 +1251,7 @@ private:
         for (const i32 t : {r.f1, r.f2})
             for (i32 sample = geo(t).samples_begin; sample < geo(t).samples_end; ++sample) {
                 const Samples::Point* sp = samples_->point_of(static_cast<std::size_t>(sample));
-                const double d1 = sample_distance(sample, sp, pc, pu, pd), d2 = sample_distance(sample, sp, pd, pw, pc);
+                const double d1 = sample_distance(sample, pc, pu, pd), d2 = sample_distance(sample, pd, pw, pc);
                 const double bound = sp->base + std::min(d1, d2);
                 if (!(bound <= p_.max_error)) return false;
                 worst = std::max(worst, bound);
