@@ -535,24 +535,50 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
 }
 
 // ---------------------------------------------------------------------------
-// Step 2: edges. Edge e joins v0[e] < v1[e]; f1[e] is the triangle that runs
-// v0 → v1, f2[e] the one that runs v1 → v0 (-1 on the border, at most one of
-// them), and c[e], d[e] are their third corners (-1 with them); v1 is
-// neighbour s0[e] of v0 and v0 is neighbour s1[e] of v1. Each edge is written
-// by its smaller end alone, which finds s1 through the triangle the two
-// share, so no per-slot edge table is built (every array here is written
-// once per round, and at 15 workers a round's traffic is what slows a task:
-// scripts/probe_contention.py).
+// Step 2: edges. Edge e joins v0[e] < v1[e], and v1 is neighbour s0[e] of v0.
+// Everything else about it is read from v0's fan (faces()): f1 is the
+// triangle that runs v0 → v1, f2 the one that runs v1 → v0 (-1 on the
+// border, at most one of them), c and d their third corners (-1 with them).
+// Each edge is written by its smaller end alone. The record is kept to what
+// the fan cannot give cheaply: every array here is written once per round and
+// read by every step after it, and at 15 workers a round's traffic is what
+// slows a task (scripts/probe_contention.py). Storing the faces, opposite
+// corners and v0's slot in v1's ring as well (eight arrays, 32 bytes per
+// edge) made the edge table the largest thing a round wrote.
 
-struct Edges {
-    std::vector<i32> v0, v1, f1, f2, c, d, s0, s1;
-    std::vector<i32> corner_slot; // build_edges's map from triangle corner 3t + r to fan slot
-    i32 count() const { return static_cast<i32>(v0.size()); }
+struct EdgeFaces {
+    i32 f1, f2, c, d;
 };
 
-void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, std::vector<i32>& scratch_count,
+struct Edges {
+    std::vector<i32> v0, v1, s0;
+    i32 count() const { return static_cast<i32>(v0.size()); }
+
+    EdgeFaces faces(const Fans& fans, i32 e) const {
+        const auto i = static_cast<std::size_t>(e);
+        const i32 v = v0[i], j = s0[i];
+        const i32 o = fans.off[static_cast<std::size_t>(v)], k = fans.k(v);
+        // f1 = (v, u, c) sits in slot j, f2 = (u, v, d) in the slot before.
+        const i32 before = j > 0 ? o + j - 1 : (fans.border[static_cast<std::size_t>(v)] ? -1 : o + k - 1);
+        EdgeFaces r;
+        r.f1 = j < k ? fans.face[static_cast<std::size_t>(o + j)] : -1;
+        r.c = j < k ? fans.prev[static_cast<std::size_t>(o + j)] : -1;
+        r.f2 = before >= 0 ? fans.face[static_cast<std::size_t>(before)] : -1;
+        r.d = before >= 0 ? fans.next[static_cast<std::size_t>(before)] : -1;
+        return r;
+    }
+    // A border edge has one face: v1 is v0's last neighbour (no f1), or its
+    // first on the border (no f2).
+    bool border(const Fans& fans, i32 e) const {
+        const auto i = static_cast<std::size_t>(e);
+        const i32 v = v0[i], j = s0[i];
+        return j == fans.k(v) || (j == 0 && fans.border[static_cast<std::size_t>(v)]);
+    }
+};
+
+void build_edges(const Fans& fans, int threads, Edges& edges, std::vector<i32>& scratch_count,
                  std::vector<i32>& scratch_offset) {
-    const i32 nv = s.vertices();
+    const i32 nv = static_cast<i32>(fans.off.size()) - 1;
     auto& count = scratch_count;
     count.resize(static_cast<std::size_t>(nv));
     parallel_for(threads, nv, [&](i64 vi) {
@@ -564,44 +590,16 @@ void build_edges(const Surface& s, const Fans& fans, int threads, Edges& edges, 
     auto& eoff = scratch_offset;
     exclusive_scan(count, eoff);
     const auto ne = static_cast<std::size_t>(eoff[static_cast<std::size_t>(nv)]);
-    for (auto* a : {&edges.v0, &edges.v1, &edges.f1, &edges.f2, &edges.c, &edges.d, &edges.s0, &edges.s1})
-        a->resize(ne);
-    // corner_slot[3t + r]: the fan slot of corner r of triangle t.
-    std::vector<i32>& corner_slot = edges.corner_slot;
-    corner_slot.resize(s.tri.size());
-    parallel_for(threads, static_cast<i64>(fans.face.size()), [&](i64 j) {
-        const auto slot = static_cast<std::size_t>(j);
-        corner_slot[3 * static_cast<std::size_t>(fans.face[slot]) + fans.corner[slot]] = static_cast<i32>(j);
-    });
+    for (auto* a : {&edges.v0, &edges.v1, &edges.s0}) a->resize(ne);
     parallel_for(threads, nv, [&](i64 vi) {
         const i32 v = static_cast<i32>(vi);
-        const i32 o = fans.off[static_cast<std::size_t>(v)], k = fans.k(v), n = fans.nn(v);
-        const bool border = fans.border[static_cast<std::size_t>(v)];
         auto e = static_cast<std::size_t>(eoff[static_cast<std::size_t>(v)]);
-        for (i32 j = 0; j < n; ++j) {
+        for (i32 j = 0, n = fans.nn(v); j < n; ++j) {
             const i32 u = fans.nbr(v, j);
             if (u < v) continue;
             edges.v0[e] = v;
             edges.v1[e] = u;
-            // f1 = (v, u, c) sits in slot j, f2 = (u, v, d) in the slot before.
-            const i32 before = j > 0 ? o + j - 1 : (border ? -1 : o + k - 1);
-            edges.f1[e] = j < k ? fans.face[static_cast<std::size_t>(o + j)] : -1;
-            edges.c[e] = j < k ? fans.prev[static_cast<std::size_t>(o + j)] : -1;
-            edges.f2[e] = before >= 0 ? fans.face[static_cast<std::size_t>(before)] : -1;
-            edges.d[e] = before >= 0 ? fans.next[static_cast<std::size_t>(before)] : -1;
             edges.s0[e] = j;
-            // Where v sits in u's ring, from the triangle they share: in the
-            // slot of that triangle in u's fan, v is prev (j < k: the
-            // triangle of v's slot j runs v, u, ...) or next (j == k, v's
-            // extra border neighbour: the last triangle runs v, ..., u).
-            const i32 vs = o + (j < k ? j : k - 1);
-            const i32 corner = fans.corner[static_cast<std::size_t>(vs)];
-            const i32 t = fans.face[static_cast<std::size_t>(vs)];
-            const i32 us = corner_slot[static_cast<std::size_t>(3 * t + (j < k ? (corner + 1) % 3 : (corner + 2) % 3))];
-            const i32 ou = fans.off[static_cast<std::size_t>(u)], ku = fans.k(u);
-            i32 i = us - ou;
-            if (j < k) i = i + 1 < ku ? i + 1 : (fans.border[static_cast<std::size_t>(u)] ? ku : 0);
-            edges.s1[e] = i;
             ++e;
         }
     });
@@ -811,24 +809,34 @@ public:
               const Samples* samples, const Params& params, int round)
         : s_(s), fans_(fans), edges_(edges), geo_(geometry), samples_(samples), p_(params), round_(round) {}
 
-    EdgeSlots slots(i32 e) const {
+    // with_w_slots: also find f1 and f2 in w's fan (a scan of its ring),
+    // which only Φ and the legality tests read.
+    EdgeSlots slots(i32 e, bool with_w_slots = true) const {
         const auto i = static_cast<std::size_t>(e);
         EdgeSlots r;
         r.u = edges_.v0[i];
         r.w = edges_.v1[i];
-        r.f1 = edges_.f1[i];
-        r.f2 = edges_.f2[i];
+        const EdgeFaces f = edges_.faces(fans_, e);
+        r.f1 = f.f1;
+        r.f2 = f.f2;
+        r.c = f.c;
+        r.d = f.d;
         r.ou = fans_.off[static_cast<std::size_t>(r.u)];
         r.ku = fans_.k(r.u);
         r.ow = fans_.off[static_cast<std::size_t>(r.w)];
         r.kw = fans_.k(r.w);
-        const i32 j = edges_.s0[i], m = edges_.s1[i];
+        // m: where u sits in w's ring (neighbours are distinct in a manifold
+        // fan, so the first match is the one).
+        const i32 j = edges_.s0[i];
         r.uf1 = j < r.ku ? j : -1;
         r.uf2 = j > 0 ? j - 1 : (border(r.u) ? -1 : r.ku - 1);
+        r.wf1 = r.wf2 = -1;
+        if (!with_w_slots) return r;
+        i32 m = 0;
+        for (const i32 n = fans_.nn(r.w); m < n && fans_.nbr(r.w, m) != r.u; ++m) {
+        }
         r.wf2 = m < r.kw ? m : -1;
         r.wf1 = m > 0 ? m - 1 : (border(r.w) ? -1 : r.kw - 1);
-        r.c = edges_.c[i];
-        r.d = edges_.d[i];
         return r;
     }
 
@@ -838,7 +846,7 @@ public:
     void classify(i32 e, Ops& ops) const {
         const auto i = static_cast<std::size_t>(e);
         ops.kind[i] = kNone;
-        classify_collapse(slots(e), hash(e), ops, i);
+        classify_collapse(slots(e, false), hash(e), ops, i);
     }
 
     // Whether collapse e is possible: a kPending one gets its Φ and position
@@ -857,7 +865,7 @@ public:
     // A flip for an interior edge with no collapse: kFlip when it gains
     // and passes every test (it needs no test at selection).
     bool propose_flip(i32 e, Ops& ops) const {
-        const EdgeSlots r = slots(e);
+        const EdgeSlots r = slots(e, false);
         return p_.flips && r.f1 >= 0 && r.f2 >= 0 && propose_flip(r, hash(e), ops, static_cast<std::size_t>(e));
     }
 
@@ -1162,7 +1170,7 @@ public:
     // A chosen collapse needs no such step: its legality test, run when its
     // turn came, already moved its samples.
     void move_flip_samples(i32 e, std::vector<i32>& owner) const {
-        const EdgeSlots r = slots(e);
+        const EdgeSlots r = slots(e, false);
         double worst = 0.0;
         place_flip_samples(r, worst, [&](i32 sample, i32 t, double) { owner[static_cast<std::size_t>(sample)] = t; });
     }
@@ -1385,8 +1393,9 @@ public:
         out[0] = edges_.v0[i];
         out[1] = edges_.v1[i];
         if (ops_.kind[i] != kFlip) return 2;
-        out[2] = edges_.c[i];
-        out[3] = edges_.d[i];
+        const EdgeFaces f = edges_.faces(fans_, e);
+        out[2] = f.c;
+        out[3] = f.d;
         return 4;
     }
 
@@ -1770,10 +1779,12 @@ void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, con
     parallel_for(threads, edges.count(), [&](i64 ei) {
         const auto e = static_cast<std::size_t>(ei);
         if (!chosen[e]) return;
-        const i32 u = edges.v0[e], w = edges.v1[e], f1 = edges.f1[e], f2 = edges.f2[e];
+        const i32 u = edges.v0[e], w = edges.v1[e];
+        const EdgeFaces ef = edges.faces(fans, static_cast<i32>(e));
+        const i32 f1 = ef.f1, f2 = ef.f2;
         const float err = ops.err[e];
         if (ops.kind[e] == kFlip) {
-            const i32 c = edges.c[e], d = edges.d[e];
+            const i32 c = ef.c, d = ef.d;
             for (const i32 v : {u, w, c, d}) mark(v);
             // f1 = (u, w, c), f2 = (w, u, d) → (c, u, d), (d, w, c).
             const i32 g1[3] = {c, u, d}, g2[3] = {d, w, c};
@@ -1826,14 +1837,12 @@ void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, con
 // Once most of the surface is as reduced as the criterion and the bounds
 // allow, a round costs what the last one changed rather than a full
 // evaluation.
-bool unchanged(const Surface& s, const Edges& edges, const std::vector<u8>& changed, std::size_t e) {
+bool unchanged(const Fans& fans, const Edges& edges, const std::vector<u8>& changed, std::size_t e) {
     const i32 u = edges.v0[e], w = edges.v1[e];
     if (changed[static_cast<std::size_t>(u)] || changed[static_cast<std::size_t>(w)]) return false;
-    for (const i32 f : {edges.f1[e], edges.f2[e]}) {
-        if (f < 0) continue;
-        for (int r = 0; r < 3; ++r)
-            if (changed[static_cast<std::size_t>(s.tri[static_cast<std::size_t>(3 * f + r)])]) return false;
-    }
+    const EdgeFaces f = edges.faces(fans, static_cast<i32>(e));
+    for (const i32 o : {f.c, f.d})
+        if (o >= 0 && changed[static_cast<std::size_t>(o)]) return false;
     return true;
 }
 
@@ -1942,7 +1951,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         st.fans += since(t0);
         if (round >= options.max_rounds) break;
         t0 = now();
-        build_edges(s, fans, threads, edges, scratch_a, scratch_b);
+        build_edges(fans, threads, edges, scratch_a, scratch_b);
         st.edges += since(t0);
         t0 = now();
         build_geometry(s, threads, geometry);
@@ -1955,7 +1964,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         const Evaluator evaluator(s, fans, edges, geometry, samples.on() ? &samples : nullptr, params, round);
         parallel_for(threads, ne, [&](i64 ei) {
             const auto e = static_cast<std::size_t>(ei);
-            if (quiet[static_cast<std::size_t>(edges.v0[e])] && unchanged(s, edges, changed, e)) ops.kind[e] = kQuiet;
+            if (quiet[static_cast<std::size_t>(edges.v0[e])] && unchanged(fans, edges, changed, e)) ops.kind[e] = kQuiet;
             else evaluator.classify(static_cast<i32>(e), ops);
         });
         chosen.assign(static_cast<std::size_t>(ne), 0);
@@ -1986,7 +1995,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
             const auto i = static_cast<std::size_t>(e);
             if (ops.kind[i] != kNone) continue;
             refused[i] = 0;
-            if (!params.flips || edges.f1[i] < 0 || edges.f2[i] < 0) refused[i] = 1;
+            if (!params.flips || edges.border(fans, e)) refused[i] = 1;
             else if (selector.clear(e)) flip_list.push_back(e);
         }
         parallel_for(threads, static_cast<i64>(flip_list.size()), [&](i64 fi) {
