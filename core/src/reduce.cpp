@@ -376,7 +376,6 @@ std::string key_text(const Surface& s, i32 v) { return std::to_string(s.key[stat
 
 struct Fans {
     std::vector<i32> off, face, next, prev;
-    std::vector<u8> corner;  // per slot: the corner (0..2) of v in its triangle
     std::vector<u8> border;
     std::vector<u8> problem; // build_fans's per-vertex findings, kept for reuse
 
@@ -418,7 +417,6 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
     fans.face.resize(corner.size());
     fans.next.resize(corner.size());
     fans.prev.resize(corner.size());
-    fans.corner.resize(corner.size());
     fans.border.assign(static_cast<std::size_t>(nv), 0);
 
     // Order each fan; record the first problem per vertex.
@@ -432,24 +430,22 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
         const i32 k = fans.off[static_cast<std::size_t>(v) + 1] - o;
         if (k == 0) return;
         constexpr i32 kSmall = 48;
-        i32 tb[kSmall], ab[kSmall], bb[kSmall], ob[kSmall], rb[kSmall], sb[kSmall], pb[kSmall];
+        i32 tb[kSmall], ab[kSmall], bb[kSmall], ob[kSmall], sb[kSmall], pb[kSmall];
         std::vector<i32> heap;
-        i32 *t = tb, *a = ab, *b = bb, *order = ob, *rc = rb, *succ = sb, *pred = pb;
+        i32 *t = tb, *a = ab, *b = bb, *order = ob, *succ = sb, *pred = pb;
         if (k > kSmall) {
-            heap.resize(static_cast<std::size_t>(7 * k));
+            heap.resize(static_cast<std::size_t>(6 * k));
             t = heap.data();
             a = t + k;
             b = a + k;
             order = b + k;
-            rc = order + k;
-            succ = rc + k;
+            succ = order + k;
             pred = succ + k;
         }
         for (i32 i = 0; i < k; ++i) {
             const i32 c = corner[static_cast<std::size_t>(o + i)];
             const i32 tri = c / 3, r = c % 3;
             t[i] = tri;
-            rc[i] = r;
             a[i] = s.tri[static_cast<std::size_t>(3 * tri + (r + 1) % 3)];
             b[i] = s.tri[static_cast<std::size_t>(3 * tri + (r + 2) % 3)];
         }
@@ -510,7 +506,6 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
             fans.face[slot] = t[order[step]];
             fans.next[slot] = a[order[step]];
             fans.prev[slot] = b[order[step]];
-            fans.corner[slot] = static_cast<u8>(rc[order[step]]);
         }
         fans.border[static_cast<std::size_t>(v)] = starts == 1;
     });
