@@ -793,7 +793,7 @@ u32 make_priority(u32 cls, double score, u64 hash) {
 struct EdgeSlots {
     i32 u, w, f1, f2;
     i32 ou, ku, uf1, uf2; // u's fan offset, size, slot of f1 / f2 (-1: none)
-    i32 ow, kw, wf1, wf2;
+    i32 ow, kw, wf1, wf2; // wf1, wf2: -1 unless slots() was asked for them
     i32 c, d;             // opposite vertices (-1: none)
 };
 
@@ -820,13 +820,13 @@ public:
         r.ku = fans_.k(r.u);
         r.ow = fans_.off[static_cast<std::size_t>(r.w)];
         r.kw = fans_.k(r.w);
-        // m: where u sits in w's ring (neighbours are distinct in a manifold
-        // fan, so the first match is the one).
         const i32 j = edges_.s0[i];
         r.uf1 = j < r.ku ? j : -1;
         r.uf2 = j > 0 ? j - 1 : (border(r.u) ? -1 : r.ku - 1);
         r.wf1 = r.wf2 = -1;
         if (!with_w_slots) return r;
+        // m: where u sits in w's ring (neighbours are distinct in a manifold
+        // fan, so the first match is the one).
         i32 m = 0;
         for (const i32 n = fans_.nn(r.w); m < n && fans_.nbr(r.w, m) != r.u; ++m) {
         }
