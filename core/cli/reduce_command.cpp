@@ -38,7 +38,8 @@ nlohmann::json reduce_json(const ReduceReport& report) {
                           {"evaluated", r.evaluated},
                           {"collapses", r.collapses},
                           {"flips", r.flips},
-                          {"changed_vertices", r.changed_vertices}});
+                          {"changed_vertices", r.changed_vertices},
+                          {"seconds", r.seconds}});
     return {{"triangles_in", report.triangles_in},   {"triangles_out", report.triangles_out},
             {"vertices_in", report.vertices_in},     {"vertices_out", report.vertices_out},
             {"rounds", rounds},                      {"seconds", report.seconds},

@@ -1824,14 +1824,26 @@ void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, con
 // diagonal). A collapse changes the fans of exactly the vertices of its two
 // leaves' faces and moves only the survivor, whose neighbours are among
 // them; a flip changes the fans of its four corners. So an edge none of whose
-// four vertices apply() marked has the answer it had last round. quiet[v]
-// says that every edge v owns (v is their smaller end) was found to have no
-// possible operation (Φ not above Φ*, illegal, no flip); an edge blocked
-// before its answer was known keeps its owner from being quiet. An edge
-// whose owner is quiet and whose four vertices are unchanged is skipped.
+// four vertices apply() marked has the answer it had last round. An
+// unchanged vertex keeps its triangles and their order, so its fan comes out
+// the same and an edge it owns keeps its slot: refused_slots[v] has bit j set
+// when the edge v owns at slot j (v its smaller end) was found to have no
+// possible operation (Φ not above Φ*, illegal, no flip). An edge so marked
+// whose four vertices are unchanged is skipped; an edge blocked before its
+// answer was known is not marked. (Marking a vertex only when every edge it
+// owns was refused, as before, evaluated 2.80 M operations on the paper
+// surface at N = 100 where this evaluates 2.69 M, for the same output.)
 // Once most of the surface is as reduced as the criterion and the bounds
 // allow, a round costs what the last one changed rather than a full
 // evaluation.
+// Slots past the mask's width are never marked: their edges are re-tested.
+constexpr i32 kRefusedSlots = 32;
+
+bool known_refused(const std::vector<u32>& refused_slots, const Edges& edges, std::size_t e) {
+    const i32 j = edges.s0[e];
+    return j < kRefusedSlots && (refused_slots[static_cast<std::size_t>(edges.v0[e])] >> j & 1u);
+}
+
 bool unchanged(const Fans& fans, const Edges& edges, const std::vector<u8>& changed, std::size_t e) {
     const i32 u = edges.v0[e], w = edges.v1[e];
     if (changed[static_cast<std::size_t>(u)] || changed[static_cast<std::size_t>(w)]) return false;
@@ -1845,7 +1857,8 @@ bool unchanged(const Fans& fans, const Edges& edges, const std::vector<u8>& chan
 // (so keys stay sorted). The scans are integer sums; the copies are gathers.
 // triangle_refs: triangle indices to renumber (the samples' owners).
 void compact(Surface& s, const std::vector<u8>& vertex_alive, const std::vector<u8>& triangle_alive, int threads,
-             std::initializer_list<std::vector<u8>*> vertex_marks, std::vector<i32>& triangle_refs,
+             std::initializer_list<std::vector<u8>*> vertex_marks, std::vector<u32>& vertex_masks,
+             std::vector<i32>& triangle_refs,
              std::vector<i32>& remap, std::vector<i32>& scratch, Surface& spare) {
     const i32 nv = s.vertices(), nt = s.triangles();
     remap.resize(static_cast<std::size_t>(nv));
@@ -1860,11 +1873,13 @@ void compact(Surface& s, const std::vector<u8>& vertex_alive, const std::vector<
         s.key[a] = s.key[b];
         s.flags[a] = s.flags[b];
         for (auto* m : vertex_marks) (*m)[a] = (*m)[b];
+        vertex_masks[a] = vertex_masks[b];
     }
     s.xyz.resize(3 * static_cast<std::size_t>(next));
     s.key.resize(static_cast<std::size_t>(next));
     s.flags.resize(static_cast<std::size_t>(next));
     for (auto* m : vertex_marks) m->resize(static_cast<std::size_t>(next));
+    vertex_masks.resize(static_cast<std::size_t>(next));
     auto& tpos = scratch;
     tpos.resize(static_cast<std::size_t>(nt));
     i32 tn = 0;
@@ -1924,7 +1939,8 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     std::vector<i32> scratch_a, scratch_b, remap;
     Surface spare; // compact()'s second triangle and error arrays
     std::vector<u8> chosen, refused, vertex_alive, triangle_alive;
-    std::vector<u8> quiet(in.vertex_count(), 0), changed(in.vertex_count(), 0);
+    std::vector<u8> changed(in.vertex_count(), 0);
+    std::vector<u32> refused_slots(in.vertex_count(), 0);
     std::vector<i32> candidate_list, flip_list, to_move;
     SelectScratch select_scratch;
     int idle_rounds = 0;
@@ -1941,7 +1957,8 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         if (options.more_threads)
             if (const int offered = options.more_threads(); offered > 0) available = offered;
         const int threads = std::min(available, kMaxRoundThreads);
-        auto t0 = now();
+        const auto round_start = now();
+        auto t0 = round_start;
         build_fans(s, threads, round == 0, fans, scratch_a, scratch_b);
         st.fans += since(t0);
         if (round >= options.max_rounds) break;
@@ -1959,7 +1976,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         const Evaluator evaluator(s, fans, edges, geometry, samples.on() ? &samples : nullptr, params, round);
         parallel_for(threads, ne, [&](i64 ei) {
             const auto e = static_cast<std::size_t>(ei);
-            if (quiet[static_cast<std::size_t>(edges.v0[e])] && unchanged(fans, edges, changed, e)) ops.kind[e] = kQuiet;
+            if (known_refused(refused_slots, edges, e) && unchanged(fans, edges, changed, e)) ops.kind[e] = kQuiet;
             else evaluator.classify(static_cast<i32>(e), ops);
         });
         chosen.assign(static_cast<std::size_t>(ne), 0);
@@ -1983,7 +2000,8 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         // Flips: for the interior edges with no collapse that no chosen
         // collapse blocks. refused[e] (set by the selection for a collapse
         // found impossible or illegal) ends as "no operation is possible on
-        // e", the answer quiet[] keeps; a blocked edge's answer is unknown.
+        // e", the answer refused_slots keeps; a blocked edge's answer is
+        // unknown.
         selector.claim_chosen(threads, candidate_list, chosen);
         flip_list.clear();
         for (i32 e = 0; e < ne; ++e) {
@@ -2001,11 +2019,11 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         std::erase_if(flip_list, [&](i32 e) { return ops.kind[static_cast<std::size_t>(e)] != kFlip; });
         const std::size_t flips_offered = flip_list.size();
         selector.choose_flips(flip_list, chosen);
-        // Quiet: every edge the vertex owns is known to have no operation.
-        std::fill(quiet.begin(), quiet.end(), u8{1});
+        std::fill(refused_slots.begin(), refused_slots.end(), u32{0});
         for (i32 e = 0; e < ne; ++e) {
             const auto i = static_cast<std::size_t>(e);
-            if (ops.kind[i] != kQuiet && !refused[i]) quiet[static_cast<std::size_t>(edges.v0[i])] = 0;
+            if ((ops.kind[i] == kQuiet || refused[i]) && edges.s0[i] < kRefusedSlots)
+                refused_slots[static_cast<std::size_t>(edges.v0[i])] |= u32{1} << edges.s0[i];
         }
         for (const i32 e : candidate_list)
             if (ops.kind[static_cast<std::size_t>(e)] != kPending) ++evaluated;
@@ -2024,6 +2042,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
             if (ops.kind[i] == kFlip) to_move.push_back(e);
         }
         if (stats.collapses == 0 && stats.flips == 0) { // the next round would find what this one did
+            stats.seconds = since(round_start);
             rep.rounds.push_back(stats);
             break;
         }
@@ -2038,9 +2057,10 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         for (std::size_t v = 0; v < changed.size(); ++v) stats.changed_vertices += changed[v] & vertex_alive[v];
         st.apply += since(t0);
         t0 = now();
-        rep.rounds.push_back(stats);
-        if (stats.collapses > 0) compact(s, vertex_alive, triangle_alive, threads, {&quiet, &changed}, samples.owner, remap, scratch_a, spare);
+        if (stats.collapses > 0) compact(s, vertex_alive, triangle_alive, threads, {&changed}, refused_slots, samples.owner, remap, scratch_a, spare);
         st.compact += since(t0);
+        stats.seconds = since(round_start);
+        rep.rounds.push_back(stats);
         idle_rounds = stats.collapses == 0 ? idle_rounds + 1 : 0;
         if (idle_rounds >= 2) break;
     }

@@ -306,9 +306,12 @@ TEST(Reduce, ReportRoundsAccountForEveryVertexAndTriangle) {
         EXPECT_EQ(rounds.front().vertices, c.piece.vertex_count()) << c.name;
         EXPECT_EQ(rounds.front().triangles, c.piece.triangle_count()) << c.name;
         std::size_t collapses = 0;
+        double round_seconds = 0.0;
         for (std::size_t r = 0; r < rounds.size(); ++r) {
             const ReduceRound& x = rounds[r];
             collapses += x.collapses;
+            EXPECT_GE(x.seconds, 0.0) << c.name << " round " << r;
+            round_seconds += x.seconds;
             const std::size_t vertices_after = r + 1 < rounds.size() ? rounds[r + 1].vertices : out.vertex_count();
             const std::size_t triangles_after =
                 r + 1 < rounds.size() ? rounds[r + 1].triangles : out.triangle_count();
@@ -323,6 +326,8 @@ TEST(Reduce, ReportRoundsAccountForEveryVertexAndTriangle) {
             EXPECT_LE(x.changed_vertices, x.vertices - x.collapses) << c.name << " round " << r;
         }
         EXPECT_GT(collapses, 0u) << c.name;
+        // The rounds are parts of the call (which adds the input checks).
+        EXPECT_LE(round_seconds, report.seconds) << c.name;
     }
 }
 

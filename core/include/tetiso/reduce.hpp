@@ -104,6 +104,7 @@ struct ReduceRound {
     // removed, rewritten or moved): what the next round's fans, edges and
     // normals would have to redo if they were updated rather than rebuilt.
     std::size_t changed_vertices = 0;
+    double seconds = 0.0; // wall clock, every step of the round
 };
 
 // Wall-clock seconds spent in each step of the rounds, summed over rounds
