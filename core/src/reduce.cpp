@@ -1832,7 +1832,8 @@ void apply(Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, con
 // whose four vertices are unchanged is skipped; an edge blocked before its
 // answer was known is not marked. (Marking a vertex only when every edge it
 // owns was refused, as before, evaluated 2.80 M operations on the paper
-// surface at N = 100 where this evaluates 2.69 M, for the same output.)
+// surface at N = 100 where this evaluates 2.69 M, for the same output and
+// about the same time.)
 // Once most of the surface is as reduced as the criterion and the bounds
 // allow, a round costs what the last one changed rather than a full
 // evaluation.
