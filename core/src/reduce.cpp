@@ -1856,10 +1856,11 @@ bool unchanged(const Fans& fans, const Edges& edges, const std::vector<u8>& chan
 
 // Step 7: drop removed vertices and triangles, keeping the order of the rest
 // (so keys stay sorted). The scans are integer sums; the copies are gathers.
-// triangle_refs: triangle indices to renumber (the samples' owners).
+// vertex_marks, vertex_masks: per-vertex arrays that follow the vertices
+// (changed, refused_slots); triangle_refs: triangle indices to renumber (the
+// samples' owners).
 void compact(Surface& s, const std::vector<u8>& vertex_alive, const std::vector<u8>& triangle_alive, int threads,
-             std::initializer_list<std::vector<u8>*> vertex_marks, std::vector<u32>& vertex_masks,
-             std::vector<i32>& triangle_refs,
+             std::vector<u8>& vertex_marks, std::vector<u32>& vertex_masks, std::vector<i32>& triangle_refs,
              std::vector<i32>& remap, std::vector<i32>& scratch, Surface& spare) {
     const i32 nv = s.vertices(), nt = s.triangles();
     remap.resize(static_cast<std::size_t>(nv));
@@ -1873,13 +1874,13 @@ void compact(Surface& s, const std::vector<u8>& vertex_alive, const std::vector<
         for (std::size_t c = 0; c < 3; ++c) s.xyz[3 * a + c] = s.xyz[3 * b + c];
         s.key[a] = s.key[b];
         s.flags[a] = s.flags[b];
-        for (auto* m : vertex_marks) (*m)[a] = (*m)[b];
+        vertex_marks[a] = vertex_marks[b];
         vertex_masks[a] = vertex_masks[b];
     }
     s.xyz.resize(3 * static_cast<std::size_t>(next));
     s.key.resize(static_cast<std::size_t>(next));
     s.flags.resize(static_cast<std::size_t>(next));
-    for (auto* m : vertex_marks) m->resize(static_cast<std::size_t>(next));
+    vertex_marks.resize(static_cast<std::size_t>(next));
     vertex_masks.resize(static_cast<std::size_t>(next));
     auto& tpos = scratch;
     tpos.resize(static_cast<std::size_t>(nt));
@@ -2058,7 +2059,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         for (std::size_t v = 0; v < changed.size(); ++v) stats.changed_vertices += changed[v] & vertex_alive[v];
         st.apply += since(t0);
         t0 = now();
-        if (stats.collapses > 0) compact(s, vertex_alive, triangle_alive, threads, {&changed}, refused_slots, samples.owner, remap, scratch_a, spare);
+        if (stats.collapses > 0) compact(s, vertex_alive, triangle_alive, threads, changed, refused_slots, samples.owner, remap, scratch_a, spare);
         st.compact += since(t0);
         stats.seconds = since(round_start);
         rep.rounds.push_back(stats);
