@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <random>
 #include <string>
 
@@ -20,6 +22,27 @@ std::filesystem::path temporary_sibling(const std::filesystem::path& path) {
     std::filesystem::path temporary = path;
     temporary += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(random() % 1000000007u);
     return temporary;
+}
+
+std::string read_whole_file(const std::filesystem::path& path) {
+    std::error_code error;
+    const auto status = std::filesystem::status(path, error);
+    if (std::filesystem::is_directory(status)) throw Error(path.string() + ": is a directory, not a file");
+    std::ifstream file(path, std::ios::binary);
+    if (!file) throw Error(path.string() + ": cannot open for reading");
+    std::string bytes;
+    if (std::filesystem::is_regular_file(status)) {
+        const std::uintmax_t size = std::filesystem::file_size(path, error);
+        if (error) throw Error(path.string() + ": cannot read its size (" + error.message() + ")");
+        bytes.resize(static_cast<std::size_t>(size));
+        file.read(bytes.data(), static_cast<std::streamsize>(size));
+        if (file.gcount() != static_cast<std::streamsize>(size))
+            throw Error(path.string() + ": cannot read it whole (it changed while being read?)");
+    } else { // a pipe or a device: no size to ask for
+        bytes.assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+    }
+    if (file.bad()) throw Error(path.string() + ": read failed");
+    return bytes;
 }
 
 void validate_and_order(Piece& piece, const std::filesystem::path& path) {

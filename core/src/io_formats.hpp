@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <string>
 
 #include "tetiso/mesh.hpp"
 
@@ -26,6 +27,12 @@ inline bool whole_below(double value, double limit) {
 // property): ParaView colours a surface by it, and reading it back lets a
 // later reduction spend only what is left of the bound.
 inline constexpr char kErrorBoundName[] = "error_bound";
+
+// The whole file, read in one call: through istreambuf_iterator, byte by
+// byte, a 38 MB PLY took 0.39-0.61 s on the 2-core VM against 0.22-0.26 s.
+// Throws tetiso::Error naming the file when it cannot be opened or read
+// (a directory, a file that shrinks while read). A pipe is read to its end.
+std::string read_whole_file(const std::filesystem::path& path);
 
 // Checks indices and coordinates and restores the key order; shared by readers.
 void validate_and_order(Piece& piece, const std::filesystem::path& path);

@@ -8,7 +8,6 @@
 #include <charconv>
 #include <cstring>
 #include <fstream>
-#include <iterator>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -70,9 +69,7 @@ public:
     }
 
     Piece read() {
-        std::ifstream file(path_, std::ios::binary);
-        if (!file) fail("cannot open for reading");
-        data_.assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
+        data_ = read_whole_file(path_);
         parse_header();
 
         Piece piece;
@@ -328,7 +325,7 @@ private:
 
     enum class Encoding { ascii, little, big };
     std::filesystem::path path_;
-    std::vector<char> data_;
+    std::string data_;
     std::size_t position_ = 0;
     Encoding encoding_ = Encoding::ascii;
     std::vector<Element> elements_;

@@ -6,7 +6,6 @@
 #include <charconv>
 #include <cstring>
 #include <fstream>
-#include <iterator>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -117,9 +116,7 @@ void write_vtp(const Piece& piece, const std::filesystem::path& path) {
 
 Piece read_vtp(const std::filesystem::path& path) {
     auto fail = [&](const std::string& what) -> Error { return Error(path.string() + ": " + what); };
-    std::ifstream file(path, std::ios::binary);
-    if (!file) throw fail("cannot open for reading");
-    const std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+    const std::string text = read_whole_file(path);
 
     const std::size_t appended = text.find("<AppendedData");
     const std::string header = text.substr(0, appended);

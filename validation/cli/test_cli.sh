@@ -45,6 +45,13 @@ expect 2 "more domains than cells" -- "$tetiso" extract --lattice 3 --domains 9 
 expect 2 "unwritable output directory" -- "$tetiso" extract --lattice 10 -o "$out/missing/s.ply"
 expect 2 "unknown output format" -- "$tetiso" extract --lattice 10 -o "$out/s.stl"
 expect 2 "check of a missing file" -- "$tetiso" check "$out/nothing.ply"
+# A directory opens for reading on Linux and only fails when read (its size
+# reads as 2^63 - 1): the error must still name it, not run out of memory.
+mkdir -p "$work/folder.ply" "$work/folder.vtp"
+expect 2 "check of a directory" -- "$tetiso" check "$work/folder.ply"
+grep -q "folder.ply: is a directory" "$work/stderr" && passed=$((passed + 1)) ||
+    { echo "FAIL: a directory's error does not say so: $(cat "$work/stderr")"; failures=$((failures + 1)); }
+expect 2 "reduce of a directory" -- "$tetiso" reduce "$work/folder.vtp" -o "$out/r.ply"
 meshes=$(cd "$(dirname "$0")/../../meshes" && pwd)
 expect 0 "extract from a TetGen mesh" -- "$tetiso" extract --mesh "$meshes/cube.1" --field torus --reduce -o "$out/t.vtp"
 expect 2 "both --mesh and --lattice" -- "$tetiso" extract --mesh "$meshes/cube.1" --lattice 10 -o "$out/t.ply"
