@@ -21,6 +21,8 @@ class TableFile {
 public:
     explicit TableFile(std::filesystem::path path) : path_(std::move(path)), in_(path_) {
         if (!in_) throw Error(path_.string() + ": cannot open");
+        // A directory opens, then reads as an empty file.
+        if (std::filesystem::is_directory(path_)) throw Error(path_.string() + ": is a directory, not a file");
     }
 
     // Reads the next data line into fields(); false at the end of the file.

@@ -52,6 +52,8 @@ expect 2 "check of a directory" -- "$tetiso" check "$work/folder.ply"
 grep -q "folder.ply: is a directory" "$work/stderr" && passed=$((passed + 1)) ||
     { echo "FAIL: a directory's error does not say so: $(cat "$work/stderr")"; failures=$((failures + 1)); }
 expect 2 "reduce of a directory" -- "$tetiso" reduce "$work/folder.vtp" -o "$out/r.ply"
+mkdir -p "$work/folder.node"
+expect 2 "mesh whose .node is a directory" -- "$tetiso" extract --mesh "$work/folder" -o "$out/t.ply"
 meshes=$(cd "$(dirname "$0")/../../meshes" && pwd)
 expect 0 "extract from a TetGen mesh" -- "$tetiso" extract --mesh "$meshes/cube.1" --field torus --reduce -o "$out/t.vtp"
 expect 2 "both --mesh and --lattice" -- "$tetiso" extract --mesh "$meshes/cube.1" --lattice 10 -o "$out/t.ply"
