@@ -45,8 +45,9 @@ expect 2 "more domains than cells" -- "$tetiso" extract --lattice 3 --domains 9 
 expect 2 "unwritable output directory" -- "$tetiso" extract --lattice 10 -o "$out/missing/s.ply"
 expect 2 "unknown output format" -- "$tetiso" extract --lattice 10 -o "$out/s.stl"
 expect 2 "check of a missing file" -- "$tetiso" check "$out/nothing.ply"
-# A directory opens for reading on Linux and only fails when read (its size
-# reads as 2^63 - 1): the error must still name it, not run out of memory.
+# A directory opens for reading on Linux and fails only when read (an
+# internal error before; asked for its size, it answers 2^63 - 1): it must be
+# a plain error naming it.
 mkdir -p "$work/folder.ply" "$work/folder.vtp"
 expect 2 "check of a directory" -- "$tetiso" check "$work/folder.ply"
 grep -q "folder.ply: is a directory" "$work/stderr" && passed=$((passed + 1)) ||
