@@ -24,14 +24,19 @@ std::filesystem::path temporary_sibling(const std::filesystem::path& path) {
     return temporary;
 }
 
-std::string read_whole_file(const std::filesystem::path& path) {
+std::ifstream open_for_reading(const std::filesystem::path& path) {
     std::error_code error;
-    const auto status = std::filesystem::status(path, error);
-    if (std::filesystem::is_directory(status)) throw Error(path.string() + ": is a directory, not a file");
+    if (std::filesystem::is_directory(path, error)) throw Error(path.string() + ": is a directory, not a file");
     std::ifstream file(path, std::ios::binary);
     if (!file) throw Error(path.string() + ": cannot open for reading");
+    return file;
+}
+
+std::string read_whole_file(const std::filesystem::path& path) {
+    std::ifstream file = open_for_reading(path);
+    std::error_code error;
     std::string bytes;
-    if (std::filesystem::is_regular_file(status)) {
+    if (std::filesystem::is_regular_file(path, error)) {
         const std::uintmax_t size = std::filesystem::file_size(path, error);
         if (error) throw Error(path.string() + ": cannot read its size (" + error.message() + ")");
         bytes.resize(static_cast<std::size_t>(size));

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "io_formats.hpp"
 #include "tetiso/error.hpp"
 
 namespace tetiso {
@@ -19,11 +20,8 @@ namespace {
 // line split into its fields, with its line number for messages.
 class TableFile {
 public:
-    explicit TableFile(std::filesystem::path path) : path_(std::move(path)), in_(path_) {
-        if (!in_) throw Error(path_.string() + ": cannot open");
-        // A directory opens, then reads as an empty file.
-        if (std::filesystem::is_directory(path_)) throw Error(path_.string() + ": is a directory, not a file");
-    }
+    explicit TableFile(std::filesystem::path path)
+        : path_(std::move(path)), in_(detail::open_for_reading(path_)) {}
 
     // Reads the next data line into fields(); false at the end of the file.
     bool next() {
