@@ -23,11 +23,22 @@ inline bool whole_below(double value, double limit) {
     return value >= 0 && value < limit && value == std::floor(value);
 }
 
-// The name both formats give each triangle's bound on the distance from the
-// raw vertices it stands for (Piece::error; a VTP cell array, a PLY face
-// property): ParaView colours a surface by it, and reading it back lets a
-// later reduction spend only what is left of the bound.
-inline constexpr char kErrorBoundName[] = "error_bound";
+// The names of tetiso's own data in both formats. They carry the project's
+// prefix because plain names are taken: MeshLab writes a PLY vertex "flags"
+// (VCG's selection and deletion bits), which read as tetiso's lock bits
+// would pin arbitrary vertices, or fail as "not a byte".
+// A vertex's global edge key: one UInt64 VTP point array; two uint32 PLY
+// vertex properties, high and low word (PLY has no 64-bit integer type).
+inline constexpr char kKeyName[] = "tetiso_key";
+inline constexpr char kKeyHighName[] = "tetiso_key_hi";
+inline constexpr char kKeyLowName[] = "tetiso_key_lo";
+// VertexFlag bits: a VTP point array, a PLY vertex property.
+inline constexpr char kFlagsName[] = "tetiso_flags";
+// Each triangle's bound on the distance from the raw vertices it stands for
+// (Piece::error; a VTP cell array, a PLY face property): ParaView colours a
+// surface by it, and reading it back lets a later reduction spend only what
+// is left of the bound.
+inline constexpr char kErrorBoundName[] = "tetiso_error_bound";
 
 // `path` opened for reading in binary mode. Throws tetiso::Error naming it
 // when it cannot be opened or is a directory (which opens on Linux and then

@@ -212,9 +212,9 @@ private:
             if (name == "x") x = index;
             if (name == "y") y = index;
             if (name == "z") z = index;
-            if (name == "key_hi") key_hi = index;
-            if (name == "key_lo") key_lo = index;
-            if (name == "flags") flags = index;
+            if (name == kKeyHighName) key_hi = index;
+            if (name == kKeyLowName) key_lo = index;
+            if (name == kFlagsName) flags = index;
         }
         if (x < 0 || y < 0 || z < 0) fail("vertex element lacks x, y or z");
         const bool keyed = key_hi >= 0 && key_lo >= 0;
@@ -340,7 +340,8 @@ void write_ply(const Piece& piece, const std::filesystem::path& path) {
     file << "ply\nformat binary_little_endian 1.0\ncomment written by tetiso\n"
          << "element vertex " << piece.vertex_count() << "\n"
          << "property float x\nproperty float y\nproperty float z\n"
-         << "property uint key_hi\nproperty uint key_lo\nproperty uchar flags\n"
+         << "property uint " << kKeyHighName << "\nproperty uint " << kKeyLowName << "\nproperty uchar " << kFlagsName
+         << "\n"
          << "element face " << piece.triangle_count() << "\n"
          << "property list uchar int vertex_indices\n"
          << (bounds ? std::string("property float ") + kErrorBoundName + "\n" : std::string())

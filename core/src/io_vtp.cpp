@@ -81,9 +81,9 @@ void write_vtp(const Piece& piece, const std::filesystem::path& path) {
          << "    <Piece NumberOfPoints=\"" << n << "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" "
          << "NumberOfPolys=\"" << m << "\">\n"
          << "      <PointData>\n"
-         << "        <DataArray type=\"UInt64\" Name=\"key\" NumberOfComponents=\"1\" format=\"appended\" offset=\""
+         << "        <DataArray type=\"UInt64\" Name=\"" << kKeyName << "\" NumberOfComponents=\"1\" format=\"appended\" offset=\""
          << offset[0] << "\"/>\n"
-         << "        <DataArray type=\"UInt8\" Name=\"flags\" NumberOfComponents=\"1\" format=\"appended\" offset=\""
+         << "        <DataArray type=\"UInt8\" Name=\"" << kFlagsName << "\" NumberOfComponents=\"1\" format=\"appended\" offset=\""
          << offset[1] << "\"/>\n"
          << "      </PointData>\n";
     if (bounds)
@@ -250,19 +250,22 @@ Piece read_vtp(const std::filesystem::path& path) {
         piece.z[v] = static_cast<float>(points[3 * v + 2]);
     }
     piece.key.resize(n);
-    if (const auto it = arrays.find("PointData/key"); it != arrays.end() && it->second.type == "UInt64") {
+    if (const auto it = arrays.find(std::string("PointData/") + kKeyName); it != arrays.end()) {
+        // Keys are exact 64-bit integers: any other type would round them.
+        if (it->second.type != "UInt64")
+            throw fail(std::string(kKeyName) + " array is " + it->second.type + ", not UInt64");
         std::size_t bytes = 0;
         const char* data = block(it->second, bytes);
-        if (bytes != n * 8) throw fail("key array has the wrong length");
+        if (bytes != n * 8) throw fail(std::string(kKeyName) + " array has the wrong length");
         if (bytes > 0) std::memcpy(piece.key.data(), data, bytes); // an empty vector's data() may be null
     } else {
         for (std::size_t v = 0; v < n; ++v) piece.key[v] = v;
     }
     piece.flags.assign(n, 0);
-    if (arrays.count("PointData/flags")) {
-        const std::vector<double> flags = values_of("PointData/flags", n);
+    if (arrays.count(std::string("PointData/") + kFlagsName)) {
+        const std::vector<double> flags = values_of(std::string("PointData/") + kFlagsName, n);
         for (std::size_t v = 0; v < n; ++v) {
-            if (!whole_below(flags[v], 256)) throw fail("flags of vertex " + std::to_string(v) + " is not a byte");
+            if (!whole_below(flags[v], 256)) throw fail(std::string(kFlagsName) + " of vertex " + std::to_string(v) + " is not a byte");
             piece.flags[v] = static_cast<std::uint8_t>(flags[v]);
         }
     }

@@ -80,6 +80,44 @@ TEST_F(Files, ReadsAsciiPlyFromOtherTools) {
     EXPECT_EQ(quad.x[2], 1.0f);
 }
 
+// Plain names that other tools give their own data are not tetiso's: MeshLab
+// writes a vertex "flags" of VCG state bits (ints far above a byte), and a
+// face "error_bound" or a VTP point array "key" of another meaning is as
+// likely. Read as tetiso's, they would lock vertices, fail as "not a byte",
+// or replace keys and bounds; they must be skipped like any other property.
+TEST_F(Files, OtherToolsDataOfTheSamePlainNamesIsNotTetisos) {
+    write_text(at("meshlab.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                  "property float z\nproperty int flags\nproperty uint key_hi\nproperty uint key_lo\n"
+                                  "element face 1\nproperty list uchar int vertex_indices\nproperty int flags\n"
+                                  "property float error_bound\nend_header\n"
+                                  "0 0 0 1073741825 7 7\n1 0 0 1 7 8\n0 1 0 1 7 9\n3 0 1 2 1073741825 -2.5\n");
+    const Piece ply = read_piece(at("meshlab.ply"));
+    EXPECT_EQ(ply.key, (std::vector<EdgeKey>{0, 1, 2}));
+    EXPECT_EQ(ply.flags, (std::vector<std::uint8_t>{0, 0, 0}));
+    EXPECT_TRUE(ply.error.empty());
+    EXPECT_EQ(ply.triangles, (std::vector<std::int32_t>{0, 1, 2}));
+
+    // The same in VTP: tetiso's arrays renamed to the plain names, which
+    // keeps every array's bytes (and so its offsets) as they were.
+    Piece piece = extract(Decomposition(Lattice(20), 2).make_domain(1, *make_field("gyroid")), 0.0f);
+    ASSERT_GT(std::count(piece.flags.begin(), piece.flags.end(), kLocked), 0);
+    piece.error.assign(piece.triangle_count(), 0.5f);
+    write_piece(piece, at("own.vtp"));
+    std::string vtp = test::read_bytes(at("own.vtp"));
+    for (const std::string name : {"key", "flags", "error_bound"}) {
+        const std::string ours = "Name=\"tetiso_" + name + "\"";
+        ASSERT_NE(vtp.find(ours), std::string::npos) << name;
+        vtp.replace(vtp.find(ours), ours.size(), "Name=\"" + name + "\"");
+    }
+    write_text(at("plain.vtp"), vtp);
+    const Piece plain = read_piece(at("plain.vtp"));
+    ASSERT_EQ(plain.vertex_count(), piece.vertex_count());
+    for (std::size_t v = 0; v < plain.vertex_count(); ++v) ASSERT_EQ(plain.key[v], v);
+    EXPECT_TRUE(std::all_of(plain.flags.begin(), plain.flags.end(), [](std::uint8_t f) { return f == 0; }));
+    EXPECT_TRUE(plain.error.empty());
+    EXPECT_EQ(plain.triangles, piece.triangles);
+}
+
 TEST_F(Files, MalformedFilesGetErrorsNamingTheFile) {
     const Lattice lattice(8);
     const Decomposition one(lattice, 1);
@@ -106,12 +144,12 @@ TEST_F(Files, MalformedFilesGetErrorsNamingTheFile) {
     // Numbers that would be undefined as integers: a fractional index, a
     // NaN flag, a list length of -1.
     const std::string ascii_head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                                   "property float z\nproperty float flags\nelement face 1\n"
+                                   "property float z\nproperty float tetiso_flags\nelement face 1\n"
                                    "property list int float vertex_indices\nend_header\n";
     write_text(at("fraction.ply"), ascii_head + "0 0 0 0\n1 0 0 0\n0 1 0 0\n3 0 1 1.5\n");
     EXPECT_NE(error_of(at("fraction.ply")).find("vertex index 1.5"), std::string::npos) << error_of(at("fraction.ply"));
     write_text(at("flag.ply"), ascii_head + "0 0 0 nan\n1 0 0 0\n0 1 0 0\n3 0 1 2\n");
-    EXPECT_NE(error_of(at("flag.ply")).find("vertex 0 has flags nan"), std::string::npos) << error_of(at("flag.ply"));
+    EXPECT_NE(error_of(at("flag.ply")).find("vertex 0 has tetiso_flags nan"), std::string::npos) << error_of(at("flag.ply"));
     write_text(at("length.ply"), ascii_head + "0 0 0 0\n1 0 0 0\n0 1 0 0\n-1 0 1 2\n");
     EXPECT_NE(error_of(at("length.ply")).find("not a whole number of at least 3"), std::string::npos)
         << error_of(at("length.ply"));
@@ -128,17 +166,20 @@ TEST_F(Files, MalformedFilesGetErrorsNamingTheFile) {
     EXPECT_NE(error_of(at("offset.vtp")).find("offset is not a count: \"zero\""), std::string::npos) << error_of(at("offset.vtp"));
     write_text(at("far.vtp"), vtp_with("offset=\"0\"", "offset=\"18446744073709551615\""));
     EXPECT_NE(error_of(at("far.vtp")).find("shorter than its offsets say"), std::string::npos) << error_of(at("far.vtp"));
+    write_text(at("keytype.vtp"), vtp_with("type=\"UInt64\" Name=\"tetiso_key\"", "type=\"Float64\" Name=\"tetiso_key\""));
+    EXPECT_NE(error_of(at("keytype.vtp")).find("tetiso_key array is Float64, not UInt64"), std::string::npos)
+        << error_of(at("keytype.vtp"));
     write_text(at("points.vtp"), vtp_with("NumberOfPoints=\"", "NumberOfPoints=\"-"));
     EXPECT_NE(error_of(at("points.vtp")).find("NumberOfPoints is not a count"), std::string::npos) << error_of(at("points.vtp"));
     Piece bad_bound = extract(one.make_domain(0, *make_field("sphere")), 2.0f);
     bad_bound.error.assign(bad_bound.triangle_count(), 0.0f);
     bad_bound.error[5] = -1.0f;
     write_piece(bad_bound, at("bound.vtp"));
-    EXPECT_NE(error_of(at("bound.vtp")).find("bound.vtp: error_bound of polygon 5 is not a finite non-negative float"),
+    EXPECT_NE(error_of(at("bound.vtp")).find("bound.vtp: tetiso_error_bound of polygon 5 is not a finite non-negative float"),
               std::string::npos)
         << error_of(at("bound.vtp"));
     write_piece(bad_bound, at("bound.ply"));
-    EXPECT_NE(error_of(at("bound.ply")).find("bound.ply: face 5 has error_bound -1.000000, not a finite non-negative float"),
+    EXPECT_NE(error_of(at("bound.ply")).find("bound.ply: face 5 has tetiso_error_bound -1.000000, not a finite non-negative float"),
               std::string::npos)
         << error_of(at("bound.ply"));
 

@@ -1,9 +1,11 @@
 // Reading and writing surfaces. Two formats, chosen by file extension:
 //  - .ply: binary little-endian PLY; vertex key as two uint32 properties
-//    (key_hi, key_lo) and flags as uchar, which PLY readers that do not know
-//    them ignore;
-//  - .vtp: VTK XML PolyData, raw appended binary, opened by ParaView; key
-//    (UInt64) and flags (UInt8) are point data arrays.
+//    (tetiso_key_hi, tetiso_key_lo) and flags as uchar (tetiso_flags), which
+//    PLY readers that do not know them ignore;
+//  - .vtp: VTK XML PolyData, raw appended binary, opened by ParaView;
+//    tetiso_key (UInt64) and tetiso_flags (UInt8) are point data arrays.
+// Readers take only these names as tetiso's data: another tool's "flags" or
+// "key" is skipped like any property they do not know.
 // Writers never leave a partial file: they write to a temporary name in the
 // same directory and rename it at the end. Readers check every count against
 // the file and every index against the vertex count.
@@ -24,7 +26,7 @@ SurfaceFormat surface_format(const std::filesystem::path& path);
 // nothing is left at `path` (an earlier file there is kept unchanged). Both
 // formats hold positions, keys, flags, triangles and, where the piece has
 // them, each triangle's error bound (Piece::error: a VTP cell array or a PLY
-// face property named "error_bound"), which reads back so that a later
+// face property named "tetiso_error_bound"), which reads back so that a later
 // reduction spends only what is left of it.
 void write_piece(const Piece& piece, const std::filesystem::path& path);
 
