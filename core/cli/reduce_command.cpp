@@ -109,7 +109,7 @@ void add_reduce_command(CLI::App& app, Command& run) {
     cmd->add_option_function<double>(
            "--max-error", [args](double e) { args->max_error = e; },
            "Bound on the distance to the input surface, absolute (0: none; default: 0.4 x mean edge length); "
-           "for an input that carries error_bound (a reduction's output), on the distance to the raw surface it "
+           "for an input that carries tetiso_error_bound (a reduction's output), on the distance to the raw surface it "
            "stands for")
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--threads", args->options.threads, "Threads (0 = all cores); output does not depend on it")
