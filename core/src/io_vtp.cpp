@@ -250,7 +250,11 @@ Piece read_vtp(const std::filesystem::path& path) {
         piece.z[v] = static_cast<float>(points[3 * v + 2]);
     }
     piece.key.resize(n);
-    if (const auto it = arrays.find(std::string("PointData/") + kKeyName); it != arrays.end()) {
+    // tetiso's arrays, by the names write_vtp gives them.
+    const std::string key_path = std::string("PointData/") + kKeyName;
+    const std::string flags_path = std::string("PointData/") + kFlagsName;
+    const std::string bound_path = std::string("CellData/") + kErrorBoundName;
+    if (const auto it = arrays.find(key_path); it != arrays.end()) {
         // Keys are exact 64-bit integers: any other type would round them.
         if (it->second.type != "UInt64")
             throw fail(std::string(kKeyName) + " array is " + it->second.type + ", not UInt64");
@@ -262,8 +266,8 @@ Piece read_vtp(const std::filesystem::path& path) {
         for (std::size_t v = 0; v < n; ++v) piece.key[v] = v;
     }
     piece.flags.assign(n, 0);
-    if (arrays.count(std::string("PointData/") + kFlagsName)) {
-        const std::vector<double> flags = values_of(std::string("PointData/") + kFlagsName, n);
+    if (arrays.count(flags_path)) {
+        const std::vector<double> flags = values_of(flags_path, n);
         for (std::size_t v = 0; v < n; ++v) {
             if (!whole_below(flags[v], 256)) throw fail(std::string(kFlagsName) + " of vertex " + std::to_string(v) + " is not a byte");
             piece.flags[v] = static_cast<std::uint8_t>(flags[v]);
@@ -282,8 +286,8 @@ Piece read_vtp(const std::filesystem::path& path) {
                        ", not a vertex index below " + std::to_string(n));
     // A polygon's error bound holds for every triangle it is cut into.
     std::vector<double> bounds;
-    if (arrays.count(std::string("CellData/") + kErrorBoundName)) {
-        bounds = values_of(std::string("CellData/") + kErrorBoundName, m);
+    if (arrays.count(bound_path)) {
+        bounds = values_of(bound_path, m);
         for (std::size_t f = 0; f < m; ++f)
             if (!(bounds[f] >= 0 && bounds[f] <= std::numeric_limits<float>::max()))
                 throw fail(std::string(kErrorBoundName) + " of polygon " + std::to_string(f) +

@@ -81,10 +81,10 @@ TEST_F(Files, ReadsAsciiPlyFromOtherTools) {
 }
 
 // Plain names that other tools give their own data are not tetiso's: MeshLab
-// writes a vertex "flags" of VCG state bits (ints far above a byte), and a
-// face "error_bound" or a VTP point array "key" of another meaning is as
-// likely. Read as tetiso's, they would lock vertices, fail as "not a byte",
-// or replace keys and bounds; they must be skipped like any other property.
+// writes a vertex "flags" of VCG state bits (ints far above a byte), and any
+// tool may write a "key" or "error_bound" of its own meaning. Read as
+// tetiso's, they would lock vertices, fail as "not a byte", or replace keys
+// and bounds; they must be skipped like any other property.
 TEST_F(Files, OtherToolsDataOfTheSamePlainNamesIsNotTetisos) {
     write_text(at("meshlab.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                                   "property float z\nproperty int flags\nproperty uint key_hi\nproperty uint key_lo\n"
