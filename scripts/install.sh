@@ -11,7 +11,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev         # tests and benchmarks
   libcgal-dev libeigen3-dev                          # checker's self-intersections; CGAL's simplifier baseline
   libmeshoptimizer-dev                               # reduction baseline
-  tetgen                                             # meshes/make_meshes.sh
+  tetgen libmetis-dev                                # meshes/make_meshes.sh; splitting them into domains
 )
 # Optional baselines, built and tested only where installed (their tests are
 # the `reference` label): libvtk9-dev (extraction) and libopenmesh-dev

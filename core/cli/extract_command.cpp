@@ -40,22 +40,6 @@ void report_empty(double level, float lowest, float highest) {
               << lowest << ", " << highest << "]\n";
 }
 
-// Mean length of the tetrahedra's edges (shared edges counted once per
-// tetrahedron): the mesh's spacing, the unit of --max-error as h is on the
-// lattice.
-double mean_edge_length(const Domain& d) {
-    double sum = 0;
-    for (std::size_t t = 0; t < d.tet_count(); ++t)
-        for (int a = 0; a < 4; ++a)
-            for (int b = a + 1; b < 4; ++b) {
-                const auto i = static_cast<std::size_t>(d.tets[4 * t + static_cast<std::size_t>(a)]);
-                const auto j = static_cast<std::size_t>(d.tets[4 * t + static_cast<std::size_t>(b)]);
-                const double dx = d.x[i] - d.x[j], dy = d.y[i] - d.y[j], dz = d.z[i] - d.z[j];
-                sum += std::sqrt(dx * dx + dy * dy + dz * dz);
-            }
-    return d.tet_count() ? sum / static_cast<double>(6 * d.tet_count()) : 0.0;
-}
-
 void run_extract_mesh(const ExtractArguments& args, const Field& field, double start) {
     const double t0 = now_seconds();
     const Domain domain = read_tetgen(TetgenSource{args.mesh, args.attribute, &field});

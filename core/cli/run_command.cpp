@@ -62,7 +62,22 @@ void run_job(const RunArguments& args) {
     const double start = now_seconds();
     keep_freed_memory();
     MpiSession mpi;
-    const Job job(args.job); // validates on every rank alike
+    // Every rank validates the configuration and reads the mesh's files; a
+    // rank that cannot (a file missing on its node) must not leave the
+    // others waiting for it.
+    std::unique_ptr<Job> built;
+    std::string setup_problem;
+    try {
+        built = std::make_unique<Job>(args.job);
+    } catch (const Error& e) {
+        setup_problem = e.what();
+    }
+    if (!mpi.all(setup_problem.empty())) {
+        if (!setup_problem.empty()) throw Error(setup_problem);
+        if (mpi.rank() == 0) throw Error("another rank could not set up the job (its message is above)");
+        throw JobStopped();
+    }
+    const Job& job = *built;
 
     // Only rank 0 writes; the others learn whether it can.
     std::string output_problem;
@@ -102,22 +117,26 @@ void run_job(const RunArguments& args) {
         tasks.push_back(task_json(t));
     }
     const JobConfig& c = args.job;
+    const Partition& partition = job.partition();
     nlohmann::json report = {
         {"command", "run"},
         {"lattice", c.lattice},
-        {"domains", c.domains},
-        {"field", c.field},
+        {"mesh", c.mesh.string()},
+        {"partition", c.mesh.empty() ? "bisection" : c.partition.empty() ? "METIS" : c.partition.string()},
+        {"domains", partition.domain_count()},
+        {"field", c.attribute ? "attribute " + std::to_string(*c.attribute) : c.field},
         {"level", job.level()},
         {"reduce", c.reduce},
         {"phi", c.reduce_options.phi},
-        {"max_error", c.reduce ? c.max_error_spacings * job.lattice().spacing() : 0.0},
+        {"max_error", c.reduce ? c.max_error_spacings * partition.spacing() : 0.0},
         {"seam_rings", c.seam_rings},
         {"sample_rings", c.sample_rings},
         {"ranks", mpi.size()},
         {"workers", std::max(1, mpi.size() - 1)},
         {"threads", c.threads},
-        {"nodes", job.lattice().node_count()},
-        {"tets", job.lattice().tet_count()},
+        {"spacing", partition.spacing()},
+        {"nodes", partition.node_count()},
+        {"tets", partition.tet_count()},
         {"raw_triangles", raw},
         {"vertices", result->surface.vertex_count()},
         {"triangles", result->surface.triangle_count()},
@@ -136,21 +155,33 @@ void add_run_command(CLI::App& app, Command& run) {
         "run", "The main job: extract and reduce every domain, seam pairwise until one surface remains "
                "(under mpirun: rank 0 controls, the others work)");
     JobConfig& job = args->job;
-    cmd->add_option("--lattice", job.lattice, "Nodes per axis of the N x N x N lattice on [0,5]^3")
-        ->required()
-        ->check(CLI::Range(std::int64_t{2}, std::int64_t{1625}));
-    cmd->add_option("--domains", job.domains, "Number of domains (recursive coordinate bisection)")
-        ->check(CLI::PositiveNumber)
-        ->capture_default_str();
+    CLI::Option* lattice = cmd->add_option("--lattice", job.lattice, "Nodes per axis of the N x N x N lattice on [0,5]^3")
+                               ->check(CLI::Range(std::int64_t{2}, std::int64_t{1625}));
+    CLI::Option* mesh = cmd->add_option("--mesh", job.mesh,
+                                        "TetGen mesh BASE (reads BASE.node and BASE.ele) instead of the lattice");
+    lattice->excludes(mesh);
+    cmd->add_option("--partition", job.partition,
+                    "With --mesh: each tetrahedron's domain, one id per line in .ele order, ids from 0 "
+                    "(as METIS's mpmetis writes BASE.epart.D; default: METIS splits the mesh into --domains)")
+        ->needs(mesh);
+    CLI::Option* domains = cmd->add_option("--domains", job.domains,
+                                           "Number of domains (the lattice: recursive coordinate bisection; a mesh "
+                                           "without --partition: METIS; with it, its domain count if given)")
+                               ->check(CLI::PositiveNumber);
     cmd->add_option("--field", job.field,
                     std::string("Built-in field (") + builtin_field_names() + ") or an expression in x, y, z")
         ->capture_default_str();
+    cmd->add_option_function<int>(
+           "--attribute", [args](int k) { args->job.attribute = k; },
+           "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
+        ->needs(mesh);
     cmd->add_option_function<double>(
         "--level", [args](double level) { args->job.level = level; },
-        "Isosurface level (default: the field's own, 0.5 for paper)");
+        "Isosurface level (default: the field's own, 0.5 for paper; 0 for --attribute)");
     add_phi_option(*cmd, job.reduce_options.phi);
     cmd->add_option("--max-error", job.max_error_spacings,
-                    "Bound on the distance to the raw surface, in lattice spacings (0: none)")
+                    "Bound on the distance to the raw surface, in spacings: the lattice's, or a mesh's mean "
+                    "edge length (0: none)")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
     cmd->add_option("--seam-rings", job.seam_rings,
@@ -169,7 +200,12 @@ void add_run_command(CLI::App& app, Command& run) {
     cmd->add_option("-o,--output", args->output, "Output surface, .ply or .vtp")->required();
     cmd->add_option("--report", args->report, "Write a JSON report (totals and one record per task) here");
     cmd->add_flag("--quiet", args->quiet, "No progress lines on stderr");
-    cmd->callback([&run, args] { run = [args] { run_job(*args); }; });
+    cmd->callback([&run, args, domains] {
+        if (args->job.lattice == 0 && args->job.mesh.empty()) throw CLI::ValidationError("give --lattice N or --mesh BASE");
+        // With a partition file the count is the file's, unless one is asked for.
+        if (!args->job.partition.empty() && domains->count() == 0) args->job.domains = 0;
+        run = [args] { run_job(*args); };
+    });
 }
 
 } // namespace tetiso::cli

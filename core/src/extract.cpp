@@ -185,6 +185,8 @@ void check_domain(const Domain& domain) {
         domain.interface.size() != n)
         throw Error(domain_name(domain) + ": node arrays differ in length");
     if (domain.tets.size() % 4 != 0) throw Error(domain_name(domain) + ": tetrahedron array is not a multiple of 4");
+    if (!std::is_sorted(domain.shared_edges.begin(), domain.shared_edges.end()))
+        throw Error(domain_name(domain) + ": shared edge keys are not sorted");
     if (n > static_cast<std::size_t>(INT32_MAX) / kBucket)
         throw Error(domain_name(domain) + ": too many nodes for one domain (" + std::to_string(n) + ")");
 }
@@ -203,8 +205,10 @@ void place_vertex(const Domain& domain, float level, std::int32_t lo, std::int32
     piece.y[vertex] = domain.y[a] + t * (domain.y[b] - domain.y[a]);
     piece.z[vertex] = domain.z[a] + t * (domain.z[b] - domain.z[a]);
     piece.key[vertex] = edge_key(domain.gid[a], domain.gid[b]);
-    piece.flags[vertex] =
-        (domain.interface[a] & domain.interface[b]) != 0 ? static_cast<std::uint8_t>(kLocked) : std::uint8_t{0};
+    const bool shared = (domain.interface[a] & domain.interface[b]) != 0 &&
+                        (domain.shared_edges.empty() ||
+                         std::binary_search(domain.shared_edges.begin(), domain.shared_edges.end(), piece.key[vertex]));
+    piece.flags[vertex] = shared ? static_cast<std::uint8_t>(kLocked) : std::uint8_t{0};
 }
 
 void resize_vertices(Piece& piece, std::size_t n) {

@@ -14,9 +14,9 @@ namespace {
 // Splits `box` (holding `count` domains) recursively and appends the leaves
 // in depth-first order, so domain ids follow space and do not depend on
 // anything but N and D. Returns the index of the tree node made for `box`.
-int bisect(const CellBox& box, int count, std::vector<CellBox>& leaves, std::vector<BisectionNode>& tree) {
+int bisect(const CellBox& box, int count, std::vector<CellBox>& leaves, std::vector<DomainTreeNode>& tree) {
     const int node = static_cast<int>(tree.size());
-    tree.push_back(BisectionNode{static_cast<int>(leaves.size()), count, -1, -1});
+    tree.push_back(DomainTreeNode{static_cast<int>(leaves.size()), count, -1, -1});
     if (count == 1) {
         leaves.push_back(box);
         return node;
@@ -173,6 +173,15 @@ Domain Decomposition::make_domain(int domain, const Field& field) const {
                 }
             }
     return out;
+}
+
+LatticePartition::LatticePartition(std::int64_t n, int domains, std::unique_ptr<Field> field)
+    : lattice_(n), decomposition_(lattice_, domains), field_(std::move(field)) {
+    if (!field_) throw Error("LatticePartition: no field");
+}
+
+std::uint64_t LatticePartition::fingerprint() const {
+    return Digest().add(lattice_.n()).add(decomposition_.domain_count()).add(field_->description()).value();
 }
 
 } // namespace tetiso

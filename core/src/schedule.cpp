@@ -8,7 +8,10 @@
 
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
+#include "tetiso/lattice.hpp"
+#include "tetiso/mesh_partition.hpp"
 #include "tetiso/seam.hpp"
+#include "tetiso/tetgen.hpp"
 
 namespace tetiso {
 
@@ -16,8 +19,8 @@ namespace {
 
 // Appends a copy of the bisection subtree under `node`, in depth-first
 // order; returns the copy's index.
-int copy_subtree(const std::vector<BisectionNode>& bisection, int node, std::vector<TaskNode>& tree) {
-    const BisectionNode& b = bisection[static_cast<std::size_t>(node)];
+int copy_subtree(const std::vector<DomainTreeNode>& bisection, int node, std::vector<TaskNode>& tree) {
+    const DomainTreeNode& b = bisection[static_cast<std::size_t>(node)];
     const int at = static_cast<int>(tree.size());
     tree.push_back(TaskNode{b.first, b.count, -1, -1});
     if (b.left >= 0) {
@@ -31,9 +34,8 @@ int copy_subtree(const std::vector<BisectionNode>& bisection, int node, std::vec
 
 } // namespace
 
-std::vector<TaskNode> task_tree(const Decomposition& decomposition) {
-    const std::vector<BisectionNode>& bisection = decomposition.tree();
-    // The subtrees hanging off the bisection tree's rightmost path, in
+std::vector<TaskNode> task_tree(const std::vector<DomainTreeNode>& bisection) {
+    // The subtrees hanging off the partition tree's rightmost path, in
     // domain order: each left child on the path, then the path's last leaf.
     std::vector<int> hanging;
     int node = 0;
@@ -62,21 +64,47 @@ std::vector<TaskNode> task_tree(const Decomposition& decomposition) {
     return tree;
 }
 
+namespace {
+
+std::unique_ptr<Partition> make_partition(const JobConfig& config, std::unique_ptr<Field> field) {
+    if (config.mesh.empty() == (config.lattice == 0)) throw Error("give either a lattice size or a mesh");
+    if (config.mesh.empty()) {
+        if (!config.partition.empty()) throw Error("a partition file applies to a mesh, not to the lattice");
+        if (config.attribute) throw Error("a node attribute as the field needs a mesh");
+        return std::make_unique<LatticePartition>(config.lattice, config.domains, std::move(field));
+    }
+    Domain mesh = read_tetgen(TetgenSource{config.mesh, config.attribute, field.get()});
+    if (!config.partition.empty()) {
+        std::vector<std::int32_t> part = read_partition(config.partition, mesh.tet_count());
+        auto partition = std::make_unique<MeshPartition>(std::move(mesh), part, config.partition.string());
+        if (config.domains != 0 && config.domains != partition->domain_count())
+            throw Error(config.partition.string() + ": " + std::to_string(partition->domain_count()) +
+                        " domains, where " + std::to_string(config.domains) + " were asked for");
+        return partition;
+    }
+    if (config.domains < 1) throw Error("domain count must be at least 1, got " + std::to_string(config.domains));
+    std::vector<std::int32_t> part = partition_with_metis(mesh, config.domains);
+    return std::make_unique<MeshPartition>(std::move(mesh), part,
+                                           config.domains == 1 ? std::string("the whole mesh") : std::string("METIS"));
+}
+
+} // namespace
+
 Job::Job(const JobConfig& config) : config_(config) {
-    lattice_ = std::make_unique<Lattice>(config.lattice);
-    decomposition_ = std::make_unique<Decomposition>(*lattice_, config.domains);
-    tree_ = task_tree(*decomposition_);
-    field_ = make_field(config.field);
-    const double level = config.level.value_or(field_->default_level());
+    std::unique_ptr<Field> field = make_field(config.field);
+    // An attribute has no level of its own; an analytic field does.
+    const double level = config.level.value_or(config.attribute ? 0.0 : field->default_level());
     if (!std::isfinite(level)) throw Error("isosurface level is not a finite number");
     level_ = static_cast<float>(level);
+    partition_ = make_partition(config, std::move(field));
+    tree_ = task_tree(partition_->tree());
     reduce_options_ = config.reduce_options;
-    if (config.max_error_spacings > 0) reduce_options_.max_error = config.max_error_spacings * lattice_->spacing();
+    if (config.max_error_spacings > 0) reduce_options_.max_error = config.max_error_spacings * partition_->spacing();
 }
 
 std::string Job::describe(int task) const {
     const TaskNode& n = node(task);
-    if (n.count == 1) return "domain " + std::to_string(n.first);
+    if (n.count == 1) return partition_->domain_name(n.first);
     return "seam of domains " + std::to_string(n.first) + "-" + std::to_string(n.first + n.count - 1);
 }
 
@@ -99,7 +127,7 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
     if (n.count == 1) {
         Piece piece;
         {
-            const Domain domain = decomposition_->make_domain(n.first, *field_);
+            const Domain domain = partition_->make_domain(n.first);
             record.stages.generate = lap();
             piece = extract(domain, level_, ExtractOptions{threads.count});
         } // the tetrahedra go before the reduction needs its memory
@@ -108,7 +136,7 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
         if (config_.reduce) {
             ReduceOptions options = reduce_options(threads);
             options.keep_samples = true;
-            piece = reduce(piece, options);
+            piece = partition_->pieces_are_manifold() ? reduce(piece, options) : reduce_piece(piece, options);
             keep_samples_near_locked(piece, config_.sample_rings);
         }
         record.stages.reduce = lap();
@@ -125,7 +153,7 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
     seam_options.sample_rings = config_.sample_rings;
     SeamReport seam_report;
     Piece piece = seam(*left, *right,
-                       [this](GlobalId a, GlobalId b) { return decomposition_->domains_of_edge(a, b); },
+                       [this](GlobalId a, GlobalId b) { return partition_->domains_of_edge(a, b); },
                        seam_options, &seam_report);
     record.stages.merge = seam_report.seconds.merge;
     record.stages.region = seam_report.seconds.region;

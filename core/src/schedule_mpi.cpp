@@ -537,6 +537,13 @@ bool MpiSession::broadcast(bool value) const {
     return flag != 0;
 }
 
+bool MpiSession::all(bool value) const {
+    if (!active_) return value;
+    int flag = value ? 1 : 0, every = 0;
+    MPI_Allreduce(&flag, &every, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    return every != 0;
+}
+
 std::optional<JobResult> run_mpi(const Job& job, const Progress& progress) {
     int rank = 0, ranks = 1;
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
@@ -544,6 +551,17 @@ std::optional<JobResult> run_mpi(const Job& job, const Progress& progress) {
     if (ranks == 1) {
         JobResult result = run_local(job, progress);
         return result;
+    }
+    // Each rank built its own partition (read the mesh's files, ran METIS):
+    // pieces of different partitions would not fit, so all must agree.
+    const std::uint64_t mine = job.partition().fingerprint();
+    std::uint64_t lowest = 0, highest = 0;
+    MPI_Allreduce(&mine, &lowest, 1, MPI_UINT64_T, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Allreduce(&mine, &highest, 1, MPI_UINT64_T, MPI_MAX, MPI_COMM_WORLD);
+    if (lowest != highest) {
+        if (rank != 0) throw JobStopped();
+        throw Error("the ranks built different partitions of the mesh (its files, or METIS's parts, differ "
+                    "between them); no task was run");
     }
     if (rank != 0) {
         work(job);
@@ -565,6 +583,7 @@ std::optional<JobResult> run_mpi(const Job&, const Progress&) {
 MpiSession::MpiSession() = default;
 MpiSession::~MpiSession() = default;
 bool MpiSession::broadcast(bool value) const { return value; }
+bool MpiSession::all(bool value) const { return value; }
 } // namespace tetiso
 
 #endif

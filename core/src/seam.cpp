@@ -3,6 +3,7 @@
 #include "tetiso/seam.hpp"
 
 #include <algorithm>
+#include <numeric>
 #include <bit>
 #include <chrono>
 #include <string>
@@ -268,22 +269,51 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
     const std::vector<std::int32_t> reached = grow(piece, around, near, options.rings);
 
     // The region: every triangle around a reached vertex, grown over pinched
-    // rim vertices until it is a manifold with border.
+    // rim vertices until it is a manifold with border. A vertex can also be
+    // pinched in the piece itself: where a domain of an unstructured
+    // partition touches itself along an edge, its piece has two fans there
+    // until the domain across that edge joins (the vertex is locked until
+    // then). Growing cannot mend that; such a vertex is frozen instead, its
+    // triangles left out of the region for good, which makes each step
+    // either freeze a vertex or add a triangle, so the loop ends.
     std::vector<std::uint8_t> in_region(piece.triangle_count(), 0);
+    std::vector<std::uint8_t> frozen(n, 0);
     std::vector<std::int32_t> region;
+    const auto corners = [&piece](std::int32_t t) { return piece.triangles.data() + 3 * static_cast<std::size_t>(t); };
+    const auto allowed = [&](std::int32_t t) {
+        const std::int32_t* c = corners(t);
+        return !frozen[static_cast<std::size_t>(c[0])] && !frozen[static_cast<std::size_t>(c[1])] &&
+               !frozen[static_cast<std::size_t>(c[2])];
+    };
     auto take_umbrella = [&](std::int32_t v) {
+        bool grew = false;
         for (std::int32_t i = around.first[static_cast<std::size_t>(v)]; i < around.first[static_cast<std::size_t>(v) + 1]; ++i) {
             const std::int32_t t = around.list[static_cast<std::size_t>(i)];
-            if (!in_region[static_cast<std::size_t>(t)]) {
+            if (!in_region[static_cast<std::size_t>(t)] && allowed(t)) {
                 in_region[static_cast<std::size_t>(t)] = 1;
                 region.push_back(t);
+                grew = true;
             }
         }
+        return grew;
     };
     for (const std::int32_t v : reached) take_umbrella(v);
     for (std::vector<std::int32_t> pinched = pinched_vertices(piece, region); !pinched.empty();
-         pinched = pinched_vertices(piece, region))
-        for (const std::int32_t v : pinched) take_umbrella(v);
+         pinched = pinched_vertices(piece, region)) {
+        bool froze = false;
+        for (const std::int32_t v : pinched)
+            if (!take_umbrella(v)) {
+                frozen[static_cast<std::size_t>(v)] = 1;
+                froze = true;
+            }
+        if (froze) {
+            std::erase_if(region, [&](std::int32_t t) {
+                if (allowed(t)) return false;
+                in_region[static_cast<std::size_t>(t)] = 0;
+                return true;
+            });
+        }
+    }
     std::sort(region.begin(), region.end());
 
     // The sub-piece, numbered in the piece's (key) order; its rim is locked so
@@ -387,6 +417,23 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
         report->seconds.reduce = reduce_seconds;
         report->seconds.splice = lap(clock);
     }
+    return out;
+}
+
+Piece reduce_piece(const Piece& piece, const ReduceOptions& options, ReduceReport* report) {
+    std::vector<std::int32_t> all(piece.triangle_count());
+    std::iota(all.begin(), all.end(), 0);
+    if (pinched_vertices(piece, all).empty()) {
+        ReduceOptions whole = options;
+        whole.keep_samples = true;
+        return reduce(piece, whole, report);
+    }
+    SeamOptions around_pinches;
+    around_pinches.reduce_options = options;
+    around_pinches.rings = 0;
+    SeamReport seam_report;
+    Piece out = reduce_near(piece, std::vector<std::uint8_t>(piece.vertex_count(), 1), around_pinches, &seam_report);
+    if (report) *report = seam_report.reduce;
     return out;
 }
 

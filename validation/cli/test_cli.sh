@@ -61,6 +61,22 @@ expect 2 "both --mesh and --lattice" -- "$tetiso" extract --mesh "$meshes/cube.1
 expect 2 "missing mesh" -- "$tetiso" extract --mesh "$out/none" -o "$out/t.ply"
 expect 2 "mesh attribute it lacks" -- "$tetiso" extract --mesh "$meshes/cube.1" --attribute 0 -o "$out/t.ply"
 expect 2 "mesh with several domains" -- "$tetiso" extract --mesh "$meshes/cube.1" --domains 4 -o "$out/t.ply"
+# The job over the mesh: split by a partition file (mpmetis's format) or METIS.
+awk 'NR > 1 && !/^#/ { print NR % 3 }' "$meshes/cube.1.ele" >"$work/three.part"
+expect 0 "run over a partitioned mesh" -- "$tetiso" run --mesh "$meshes/cube.1" --partition "$work/three.part" --field torus --quiet -o "$out/t.vtp" --report "$out/r.json"
+expect 2 "run with both --mesh and --lattice" -- "$tetiso" run --mesh "$meshes/cube.1" --lattice 10 -o "$out/t.ply"
+expect 2 "run with neither --mesh nor --lattice" -- "$tetiso" run --domains 4 -o "$out/t.ply"
+expect 2 "partition without a mesh" -- "$tetiso" run --lattice 10 --partition "$work/three.part" -o "$out/t.ply"
+expect 2 "partition of another domain count" -- "$tetiso" run --mesh "$meshes/cube.1" --partition "$work/three.part" --domains 4 -o "$out/t.ply"
+head -n 100 "$work/three.part" >"$work/short.part"
+expect 2 "partition shorter than the mesh" -- "$tetiso" run --mesh "$meshes/cube.1" --partition "$work/short.part" -o "$out/t.ply"
+if grep -q "short.part: 100 domain ids for the mesh's 16251 tetrahedra" "$work/stderr"; then
+    passed=$((passed + 1))
+else
+    echo "FAIL: a short partition's error names neither the file nor the counts: $(cat "$work/stderr")"
+    failures=$((failures + 1))
+fi
+expect 2 "missing partition file" -- "$tetiso" run --mesh "$meshes/cube.1" --partition "$work/none.part" -o "$out/t.ply"
 
 # A level outside the range: an empty surface, said so on stderr, exit 0.
 "$tetiso" extract --lattice 10 --field sphere --level 50 -o "$work/empty.ply" 2>"$work/stderr"

@@ -2,12 +2,12 @@
 reduction of RAW: same per-component signatures, no non-manifold edges or
 vertices, no degenerate triangles, consistent orientation, and a symmetric
 Hausdorff distance below the bound given in lattice spacings of a
-50-node lattice (h = 5/49)."""
+50-node lattice (h = 5/49), or as a distance with --absolute."""
 import json
 import sys
 
 report = json.load(open(sys.argv[1]))
-bound = float(sys.argv[2]) * 5.0 / 49.0
+bound = float(sys.argv[2]) * (1.0 if "--absolute" in sys.argv[3:] else 5.0 / 49.0)
 topology = report["topology"]
 against = report["against"]
 problems = []

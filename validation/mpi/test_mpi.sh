@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The MPI job end to end: the same surface for any number of ranks, the
 # topology of the D = 1 raw surface after seaming and reduction, a failing
-# task ending every rank with no output, and rank 0 running the last seams.
+# task ending every rank with no output, rank 0 running the last seams, and
+# an unstructured mesh split into domains.
 # Usage: test_mpi.sh tetiso mpiexec [test_mpi_failure]
 set -u
 tetiso=$1
@@ -106,6 +107,47 @@ if [ -n "$failure_test" ]; then
             fail "test_mpi_failure with $k ranks: $(head -c 600 "$work/failure.out")"
     done
 fi
+
+# 6. An unstructured TetGen mesh split by a partition file (octants of the
+#    tetrahedra's centroids, written here) and by METIS: the same surface for
+#    any number of ranks, sound against the whole mesh's raw surface.
+mesh="$here/../../meshes/cube.1"
+python3 - "$mesh" "$work/octants.part" <<'PY'
+import sys
+base, out = sys.argv[1], sys.argv[2]
+def rows(path):
+    for line in open(path):
+        line = line.split("#")[0].split()
+        if line: yield line
+nodes = rows(base + ".node"); next(nodes)
+xyz = {int(r[0]): tuple(map(float, r[1:4])) for r in nodes}
+eles = rows(base + ".ele"); next(eles)
+with open(out, "w") as f:
+    for r in eles:
+        c = [sum(xyz[int(v)][a] for v in r[1:5]) / 4 for a in range(3)]
+        f.write(f"{(c[0] > 2.5) + 2 * (c[1] > 2.5) + 4 * (c[2] > 2.5)}\n")
+PY
+"$tetiso" extract --mesh "$mesh" --field torus -o "$work/raw-mesh.ply" || fail "extract of the mesh"
+for split in "--partition $work/octants.part" "--domains 6"; do
+    # shellcheck disable=SC2086
+    if ! "$tetiso" run --mesh "$mesh" $split --field torus --quiet -o "$work/mesh1.ply" 2>"$work/stderr"; then
+        grep -q "without METIS" "$work/stderr" && [ "$split" = "--domains 6" ] && continue
+        fail "mesh run ($split): $(head -3 "$work/stderr")"
+        continue
+    fi
+    for k in 2 3; do
+        # shellcheck disable=SC2086
+        if mpi "$k" "$tetiso" run --mesh "$mesh" $split --field torus --quiet -o "$work/mesh$k.ply"; then
+            cmp -s "$work/mesh1.ply" "$work/mesh$k.ply" && ok || fail "mesh ($split): $k ranks differ from 1"
+        else
+            fail "mesh run ($split) with $k ranks"
+        fi
+    done
+    # Half the mesh's spacing (its mean edge length, 0.43).
+    "$tetiso" check "$work/mesh1.ply" --against "$work/raw-mesh.ply" >"$work/check.json" &&
+        python3 "$here/expect_sound.py" "$work/check.json" 0.215 --absolute && ok ||
+        fail "mesh ($split): $(head -c 400 "$work/check.json")"
+done
 
 echo "$passed passed, $failures failed"
 [ "$failures" -eq 0 ]

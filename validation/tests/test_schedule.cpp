@@ -30,7 +30,7 @@ TEST(TaskTree, EveryDomainOnceAndEverySeamJoinsAdjacentNeighbours) {
         SCOPED_TRACE("N = " + std::to_string(c.lattice) + ", D = " + std::to_string(c.domains));
         const Lattice lattice(c.lattice);
         const Decomposition decomposition(lattice, c.domains);
-        const std::vector<TaskNode> tree = task_tree(decomposition);
+        const std::vector<TaskNode> tree = task_tree(decomposition.tree());
         ASSERT_EQ(tree.size(), static_cast<std::size_t>(2 * c.domains - 1));
         EXPECT_EQ(tree[0].first, 0);
         EXPECT_EQ(tree[0].count, c.domains);
@@ -74,7 +74,7 @@ TEST(TaskTree, TheLastDomainJoinsAtTheRootAndTheRestIsBisectionSubtrees) {
         SCOPED_TRACE("N = " + std::to_string(c.lattice) + ", D = " + std::to_string(c.domains));
         const Lattice lattice(c.lattice);
         const Decomposition decomposition(lattice, c.domains);
-        const std::vector<TaskNode> tree = task_tree(decomposition);
+        const std::vector<TaskNode> tree = task_tree(decomposition.tree());
         const TaskNode& last = tree[static_cast<std::size_t>(tree[0].right)];
         EXPECT_EQ(last.count, 1);
         EXPECT_EQ(last.first, c.domains - 1);
@@ -82,7 +82,7 @@ TEST(TaskTree, TheLastDomainJoinsAtTheRootAndTheRestIsBisectionSubtrees) {
         int chain = 0;
         for (std::size_t t = 0; t < tree.size(); ++t) {
             const TaskNode& n = tree[t];
-            const auto same = [&](const BisectionNode& b) { return b.first == n.first && b.count == n.count; };
+            const auto same = [&](const DomainTreeNode& b) { return b.first == n.first && b.count == n.count; };
             if (std::any_of(bisection.begin(), bisection.end(), same)) continue;
             EXPECT_EQ(n.first, 0) << "task " << t << " is neither a bisection node nor on the chain";
             ++chain;

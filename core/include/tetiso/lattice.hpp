@@ -8,10 +8,12 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "tetiso/field.hpp"
 #include "tetiso/mesh.hpp"
+#include "tetiso/partition.hpp"
 
 namespace tetiso {
 
@@ -51,17 +53,6 @@ private:
     std::int64_t n_;
 };
 
-// One node of the bisection tree. It covers domains [first, first + count);
-// a leaf (count 1) is one domain, an inner node's children are the two boxes
-// its cut made. Every node covers a box, so the children of a node are
-// adjacent across the cut and their union is convex.
-struct BisectionNode {
-    int first = 0;
-    int count = 1;
-    int left = -1;  // index of the child node, -1 for a leaf
-    int right = -1;
-};
-
 // Recursive coordinate bisection of the lattice's cells into D boxes: each
 // split cuts the longest side of a box, dividing the domain count and the
 // cells in proportion, so domains differ in size by about one slab of cells.
@@ -80,8 +71,10 @@ public:
         return neighbours_.at(static_cast<std::size_t>(domain));
     }
 
-    // The bisection tree, root first; children come after their parent.
-    const std::vector<BisectionNode>& tree() const { return tree_; }
+    // The bisection tree, root first; children come after their parent. Every
+    // node covers a box, so the children of a node are adjacent across the
+    // cut and their union is convex.
+    const std::vector<DomainTreeNode>& tree() const { return tree_; }
 
     // Domains whose closed box contains the mesh edge between two nodes, sorted.
     std::vector<int> domains_of_edge(GlobalId a, GlobalId b) const;
@@ -92,8 +85,40 @@ public:
 private:
     const Lattice& lattice_;
     std::vector<CellBox> boxes_;
-    std::vector<BisectionNode> tree_;
+    std::vector<DomainTreeNode> tree_;
     std::vector<std::vector<int>> neighbours_;
+};
+
+// The lattice test problem as the job's Partition: the lattice, its
+// bisection into `domains` boxes and the field, each domain generated on
+// demand.
+class LatticePartition final : public Partition {
+public:
+    // Throws tetiso::Error for a lattice or domain count Decomposition refuses.
+    LatticePartition(std::int64_t n, int domains, std::unique_ptr<Field> field);
+    LatticePartition(const LatticePartition&) = delete; // decomposition_ refers to lattice_
+    LatticePartition& operator=(const LatticePartition&) = delete;
+
+    const Lattice& lattice() const { return lattice_; }
+    const Decomposition& decomposition() const { return decomposition_; }
+
+    int domain_count() const override { return decomposition_.domain_count(); }
+    const std::vector<int>& neighbours(int domain) const override { return decomposition_.neighbours(domain); }
+    const std::vector<DomainTreeNode>& tree() const override { return decomposition_.tree(); }
+    std::vector<int> domains_of_edge(GlobalId a, GlobalId b) const override {
+        return decomposition_.domains_of_edge(a, b);
+    }
+    Domain make_domain(int domain) const override { return decomposition_.make_domain(domain, *field_); }
+    bool pieces_are_manifold() const override { return true; } // boxes
+    double spacing() const override { return lattice_.spacing(); }
+    std::int64_t node_count() const override { return lattice_.node_count(); }
+    std::int64_t tet_count() const override { return lattice_.tet_count(); }
+    std::uint64_t fingerprint() const override;
+
+private:
+    Lattice lattice_;
+    Decomposition decomposition_;
+    std::unique_ptr<Field> field_;
 };
 
 } // namespace tetiso

@@ -43,13 +43,23 @@ struct Domain {
     // Bit s is set when the node lies on interface surface s of this domain
     // (a surface it shares with other domains; the outer boundary of the whole
     // mesh is no interface). An edge lies on an interface exactly when the
-    // masks of its two ends share a bit.
+    // masks of its two ends share a bit and, where shared_edges is not
+    // empty, its key is listed there.
     std::vector<std::uint8_t> interface;
+    // For a domain that is no box (a part of an unstructured mesh), whose
+    // node masks cannot tell a shared edge from a chord through the domain:
+    // the keys of the edges it shares with other domains, sorted.
+    std::vector<EdgeKey> shared_edges;
     std::vector<std::int32_t> tets; // 4 local node indices each, positively oriented
 
     std::size_t node_count() const { return gid.size(); }
     std::size_t tet_count() const { return tets.size() / 4; }
 };
+
+// Mean length of a domain's tetrahedron edges, each edge counted once per
+// tetrahedron: an unstructured mesh's spacing, the unit of error bounds that
+// is h on the lattice. 0 for a domain without tetrahedra.
+double mean_edge_length(const Domain& domain);
 
 enum VertexFlag : std::uint8_t {
     // The vertex lies on an interface to a domain that is not part of this

@@ -11,6 +11,7 @@
 // for any number of workers and any timing.
 #pragma once
 
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -20,22 +21,29 @@
 #include <vector>
 
 #include "tetiso/field.hpp"
-#include "tetiso/lattice.hpp"
 #include "tetiso/mesh.hpp"
+#include "tetiso/partition.hpp"
 #include "tetiso/reduce.hpp"
 #include "tetiso/seam.hpp"
 
 namespace tetiso {
 
 struct JobConfig {
+    // The mesh: the N^3 lattice test problem, split into `domains` boxes, or
+    // an unstructured TetGen mesh (`mesh`, the base name), split by a
+    // partition file or, without one, into `domains` parts by METIS.
     std::int64_t lattice = 0;        // N of the N^3 lattice
-    int domains = 1;                 // D
+    std::filesystem::path mesh;      // TetGen BASE (BASE.node, BASE.ele), instead of the lattice
+    std::filesystem::path partition; // with mesh: each tetrahedron's domain, one id per line
+    int domains = 1;                 // D; with a partition file, 0 or its count
     std::string field = "paper";     // built-in name or expression
-    std::optional<double> level;     // default: the field's own
+    std::optional<int> attribute;    // with mesh: the field is this node attribute instead
+    std::optional<double> level;     // default: the field's own (0 for an attribute)
     bool reduce = true;              // --no-reduce turns every reduction off
     ReduceOptions reduce_options;    // phi and friends; threads is set per task
-    // Bound on the reduction's distance to the raw surface, in lattice
-    // spacings h (sets reduce_options.max_error); <= 0 leaves it as given.
+    // Bound on the reduction's distance to the raw surface, in spacings h
+    // (Partition::spacing: the lattice's, or an unstructured mesh's mean edge
+    // length; sets reduce_options.max_error); <= 0 leaves it as given.
     double max_error_spacings = 0.25;
     int seam_rings = SeamOptions{}.rings; // reach of the reduction after a seam
     // Raw vertices each piece keeps for later seams (SeamOptions::sample_rings):
@@ -48,7 +56,7 @@ enum class TaskKind : std::int32_t { domain = 0, seam = 1 };
 
 // One task of the job's tree: it covers domains [first, first + count); a
 // leaf (count 1) is one domain's task, an inner node seams its two
-// children's pieces. Unlike a BisectionNode it need not cover a box.
+// children's pieces. Unlike the partition's tree nodes it need not cover a box.
 struct TaskNode {
     int first = 0;
     int count = 1;
@@ -56,10 +64,11 @@ struct TaskNode {
     int right = -1;
 };
 
-// The job's task tree for `decomposition`: root first, children after their
+// The job's task tree for a partition's merge tree: root first, children after their
 // parent, leaf tasks in domain order (a lower task index is a lower domain).
 //
-// The tree is the bisection tree (Decomposition::tree) with its rightmost
+// The tree is the partition's tree (Partition::tree; the lattice's is its
+// bisection) with its rightmost
 // path turned into a chain that adds the subtrees hanging off that path one
 // at a time, in domain order: ((((A + B) + C) + D) + ...), where the
 // bisection tree had (A + (B + (C + (D + ...)))). Domains are handed out in
@@ -71,7 +80,7 @@ struct TaskNode {
 // domain only the seams of the last few subtrees remain: the job's serial
 // tail, which also grows with the worker count, shrinks (on the 16-core
 // device at N = 500 it halved: results/speedup/README.md, session 14).
-std::vector<TaskNode> task_tree(const Decomposition& decomposition);
+std::vector<TaskNode> task_tree(const std::vector<DomainTreeNode>& partition_tree);
 
 // The threads a task runs with: `count` to begin with and, where `more` is
 // set, what it offers before each reduction round (ReduceOptions::
@@ -113,16 +122,17 @@ struct JobResult {
 // seconds since the start.
 using Progress = std::function<void(int, int, double)>;
 
-// Everything a rank needs to run tasks: lattice, decomposition, field.
-// Building it validates the configuration (throws tetiso::Error).
+// Everything a rank needs to run tasks: the mesh's partition and the field.
+// Building it validates the configuration and reads any files (throws
+// tetiso::Error); every rank builds its own, and an MPI job checks that all
+// agree (Partition::fingerprint) before it starts.
 class Job {
 public:
     explicit Job(const JobConfig& config);
     virtual ~Job() = default;
 
     const JobConfig& config() const { return config_; }
-    const Lattice& lattice() const { return *lattice_; }
-    const Decomposition& decomposition() const { return *decomposition_; }
+    const Partition& partition() const { return *partition_; }
     float level() const { return level_; }
     int task_count() const { return static_cast<int>(tree_.size()); }
     const TaskNode& node(int task) const { return tree_[static_cast<std::size_t>(task)]; }
@@ -147,10 +157,8 @@ private:
     }
 
     JobConfig config_;
-    std::unique_ptr<Lattice> lattice_;
-    std::unique_ptr<Decomposition> decomposition_;
+    std::unique_ptr<Partition> partition_;
     std::vector<TaskNode> tree_;
-    std::unique_ptr<Field> field_;
     float level_ = 0;
     ReduceOptions reduce_options_;
 };
@@ -204,6 +212,8 @@ public:
     int size() const { return size_; }
     // Rank 0's value, on every rank.
     bool broadcast(bool value) const;
+    // Whether `value` is true on every rank, on every rank.
+    bool all(bool value) const;
 
 private:
     bool active_ = false;

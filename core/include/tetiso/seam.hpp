@@ -81,6 +81,15 @@ struct SeamReport {
 Piece seam(const Piece& a, const Piece& b, const EdgeDomains& domains_of_edge, const SeamOptions& options = {},
            SeamReport* report = nullptr);
 
+// Reduces a domain's piece, keeping its raw vertices as samples: the whole
+// of it where it is a 2-manifold, which a box domain's piece always is. A
+// domain of an unstructured partition may touch itself along an edge, and
+// its piece then has two fans at the vertex on that edge (locked, since the
+// edge is shared); all but the triangles around such vertices is reduced
+// then, by reduce_near's rules, and they wait for the seam that completes
+// them.
+Piece reduce_piece(const Piece& piece, const ReduceOptions& options, ReduceReport* report = nullptr);
+
 // Reduces `piece` near the vertices marked in `seed` (see seam); exposed for
 // tests and for callers that unlock vertices by other means.
 Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, const SeamOptions& options,

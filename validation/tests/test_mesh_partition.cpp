@@ -1,0 +1,326 @@
+// An unstructured mesh split into domains by a domain id per tetrahedron
+// (core/src/mesh_partition.cpp) and the job over it: every tetrahedron in
+// exactly one domain, the shared edges and their holders as a brute-force
+// count over the domains finds them, a merge tree that joins adjacent
+// domains, and the job's surface equal to the whole mesh's extraction
+// (unreduced) or of its topology (reduced), for partitions made here
+// independently of METIS: octants, a 3 x 3 x 3 grid and a scatter in which
+// every domain is hundreds of pieces.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <string>
+
+#include "test_support.hpp"
+#include "tetiso/check.hpp"
+#include "tetiso/error.hpp"
+#include "tetiso/extract.hpp"
+#include "tetiso/field.hpp"
+#include "tetiso/mesh_partition.hpp"
+#include "tetiso/schedule.hpp"
+#include "tetiso/tetgen.hpp"
+
+namespace tetiso {
+namespace {
+
+const std::filesystem::path kCube = std::filesystem::path(TETISO_MESHES_DIR) / "cube.1";
+
+Domain cube(const Field& field) { return read_tetgen(TetgenSource{kCube, std::nullopt, &field}); }
+
+std::array<double, 3> centroid(const Domain& mesh, std::size_t t) {
+    std::array<double, 3> c{};
+    for (int k = 0; k < 4; ++k) {
+        const auto v = static_cast<std::size_t>(mesh.tets[4 * t + static_cast<std::size_t>(k)]);
+        c[0] += mesh.x[v] / 4.0;
+        c[1] += mesh.y[v] / 4.0;
+        c[2] += mesh.z[v] / 4.0;
+    }
+    return c;
+}
+
+// Domain ids by the cell of a g x g x g grid over [0,5]^3 holding each
+// tetrahedron's centroid, numbered against the grid's order so that the
+// partition's renumbering has work to do.
+std::vector<std::int32_t> grid_partition(const Domain& mesh, int g) {
+    std::vector<std::int32_t> part(mesh.tet_count());
+    for (std::size_t t = 0; t < part.size(); ++t) {
+        const auto c = centroid(mesh, t);
+        int cell = 0;
+        for (int axis = 2; axis >= 0; --axis)
+            cell = cell * g + std::clamp(static_cast<int>(c[static_cast<std::size_t>(axis)] / 5.0 * g), 0, g - 1);
+        part[t] = g * g * g - 1 - cell;
+    }
+    return part;
+}
+
+// Every domain a scatter of single tetrahedra: nearly every edge is shared,
+// and each domain's surface is hundreds of open fragments.
+std::vector<std::int32_t> scattered_partition(const Domain& mesh, int domains) {
+    std::vector<std::int32_t> part(mesh.tet_count());
+    for (std::size_t t = 0; t < part.size(); ++t) part[t] = static_cast<std::int32_t>((t * 2654435761u >> 7) % static_cast<std::size_t>(domains));
+    return part;
+}
+
+struct Case {
+    const char* name;
+    std::vector<std::int32_t> (*make)(const Domain&);
+};
+
+const Case kCases[] = {
+    {"octants", [](const Domain& m) { return grid_partition(m, 2); }},
+    {"grid27", [](const Domain& m) { return grid_partition(m, 3); }},
+    {"scattered5", [](const Domain& m) { return scattered_partition(m, 5); }},
+};
+
+void PrintTo(const Case& c, std::ostream* out) { *out << c.name; }
+
+class MeshPartitionCase : public ::testing::TestWithParam<Case> {};
+
+using Tet = std::array<GlobalId, 4>;
+
+Tet sorted_tet(const Domain& d, std::size_t t) {
+    Tet out;
+    for (int k = 0; k < 4; ++k) out[static_cast<std::size_t>(k)] = d.gid[static_cast<std::size_t>(d.tets[4 * t + static_cast<std::size_t>(k)])];
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+TEST_P(MeshPartitionCase, DomainsCoverTheMeshAndKnowTheirSharedEdges) {
+    const auto field = make_field("sphere");
+    const Domain whole = cube(*field);
+    const std::vector<std::int32_t> part = GetParam().make(whole);
+    const MeshPartition partition(whole, part, GetParam().name);
+    const int domains = partition.domain_count();
+    ASSERT_EQ(domains, *std::max_element(part.begin(), part.end()) + 1);
+
+    // Every tetrahedron in exactly one domain, and the domain's nodes carry
+    // the whole mesh's positions and values.
+    std::multiset<Tet> all, covered;
+    for (std::size_t t = 0; t < whole.tet_count(); ++t) all.insert(sorted_tet(whole, t));
+    std::map<EdgeKey, std::set<int>> holders; // brute force: who holds each edge
+    std::int64_t tets = 0;
+    for (int d = 0; d < domains; ++d) {
+        const Domain domain = partition.make_domain(d);
+        EXPECT_EQ(static_cast<std::int64_t>(domain.tet_count()), partition.domain_tet_count(d));
+        tets += partition.domain_tet_count(d);
+        for (std::size_t v = 0; v < domain.node_count(); ++v) {
+            const auto g = static_cast<std::size_t>(domain.gid[v]);
+            ASSERT_EQ(domain.x[v], whole.x[g]);
+            ASSERT_EQ(domain.f[v], whole.f[g]);
+        }
+        for (std::size_t t = 0; t < domain.tet_count(); ++t) {
+            const Tet tet = sorted_tet(domain, t);
+            covered.insert(tet);
+            for (int a = 0; a < 4; ++a)
+                for (int b = a + 1; b < 4; ++b) holders[edge_key(tet[static_cast<std::size_t>(a)], tet[static_cast<std::size_t>(b)])].insert(d);
+        }
+    }
+    EXPECT_EQ(tets, static_cast<std::int64_t>(whole.tet_count()));
+    EXPECT_TRUE(all == covered) << "the domains' tetrahedra are not the mesh's";
+
+    // Holders and neighbours as the brute-force count finds them.
+    std::vector<std::set<int>> neighbours(static_cast<std::size_t>(domains));
+    std::vector<std::vector<EdgeKey>> shared(static_cast<std::size_t>(domains));
+    std::size_t wrong = 0;
+    for (const auto& [key, set] : holders) {
+        const std::vector<int> expected(set.begin(), set.end());
+        wrong += partition.domains_of_edge(edge_key_low(key), edge_key_high(key)) == expected ? 0 : 1;
+        if (set.size() > 1)
+            for (const int d : set) {
+                shared[static_cast<std::size_t>(d)].push_back(key);
+                for (const int e : set)
+                    if (e != d) neighbours[static_cast<std::size_t>(d)].insert(e);
+            }
+    }
+    EXPECT_EQ(wrong, 0u) << "edges whose holders domains_of_edge gets wrong";
+    for (int d = 0; d < domains; ++d) {
+        const auto& n = partition.neighbours(d);
+        EXPECT_EQ(std::set<int>(n.begin(), n.end()), neighbours[static_cast<std::size_t>(d)]) << "domain " << d;
+        EXPECT_EQ(partition.make_domain(d).shared_edges, shared[static_cast<std::size_t>(d)]) << "domain " << d;
+    }
+
+    // The tree: the root covers every domain, each inner node's children
+    // split its range and share an edge.
+    const auto& tree = partition.tree();
+    ASSERT_EQ(tree.size(), static_cast<std::size_t>(2 * domains - 1));
+    EXPECT_EQ(tree[0].first, 0);
+    EXPECT_EQ(tree[0].count, domains);
+    for (std::size_t i = 0; i < tree.size(); ++i) {
+        const DomainTreeNode& n = tree[i];
+        if (n.left < 0) {
+            EXPECT_EQ(n.count, 1);
+            continue;
+        }
+        ASSERT_GT(n.left, static_cast<int>(i));
+        ASSERT_GT(n.right, static_cast<int>(i));
+        const DomainTreeNode& l = tree[static_cast<std::size_t>(n.left)];
+        const DomainTreeNode& r = tree[static_cast<std::size_t>(n.right)];
+        EXPECT_EQ(l.first, n.first);
+        EXPECT_EQ(r.first, l.first + l.count);
+        EXPECT_EQ(l.count + r.count, n.count);
+        bool adjacent = false;
+        for (int a = l.first; a < l.first + l.count && !adjacent; ++a)
+            for (const int b : partition.neighbours(a)) adjacent = adjacent || (b >= r.first && b < r.first + r.count);
+        EXPECT_TRUE(adjacent) << "tree node " << i << " joins domains that share no edge";
+    }
+}
+
+JobConfig mesh_job(const std::string& field, bool reduce, int threads = 1) {
+    JobConfig config;
+    config.mesh = kCube;
+    config.field = field;
+    config.reduce = reduce;
+    config.threads = threads;
+    return config;
+}
+
+// A partition file in a scratch directory, removed with the object.
+struct PartitionFile {
+    std::filesystem::path path;
+    PartitionFile(const std::vector<std::int32_t>& part, const std::string& name)
+        : path(std::filesystem::temp_directory_path() /
+               ("tetiso_partition_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" + name)) {
+        std::ofstream out(path);
+        for (const std::int32_t p : part) out << p << '\n';
+    }
+    ~PartitionFile() { std::filesystem::remove(path); }
+};
+
+// Unreduced, the seamed pieces are the whole mesh's surface: the same
+// vertices, bit for bit, no lock left, the same triangles.
+TEST_P(MeshPartitionCase, SeamedUnreducedSurfaceIsTheWholeMeshsExtraction) {
+    for (const char* field : {"sphere", "torus", "gyroid"}) {
+        SCOPED_TRACE(field);
+        const auto f = make_field(field);
+        const Domain whole = cube(*f);
+        const Piece expected = extract(whole, static_cast<float>(f->default_level()));
+        const PartitionFile file(GetParam().make(whole), GetParam().name);
+        JobConfig config = mesh_job(field, false);
+        config.partition = file.path;
+        config.domains = 0;
+        const Piece out = run_local(Job(config), {}).surface;
+        ASSERT_GT(out.triangle_count(), 100u);
+        EXPECT_TRUE(test::same_surface(out, expected));
+    }
+}
+
+// Reduced, the surface keeps the whole mesh's topology, within half a
+// spacing, and comes out the same for one thread and two.
+TEST_P(MeshPartitionCase, ReducedSurfaceKeepsTheTopologyForAnyThreadCount) {
+    for (const char* field : {"sphere", "torus", "gyroid"}) {
+        SCOPED_TRACE(field);
+        const auto f = make_field(field);
+        const Domain whole = cube(*f);
+        const Piece raw = extract(whole, static_cast<float>(f->default_level()));
+        const PartitionFile file(GetParam().make(whole), GetParam().name);
+        JobConfig config = mesh_job(field, true);
+        config.partition = file.path;
+        config.domains = 0;
+        const Job job(config);
+        const Piece out = run_local(job, {}).surface;
+        config.threads = 2;
+        const Piece two = run_local(Job(config), {}).surface;
+        EXPECT_TRUE(out.key == two.key && test::same_bits(out.x, two.x) && out.triangles == two.triangles)
+            << "1 and 2 threads differ";
+
+        const TopologyReport before = check_topology(raw), after = check_topology(out);
+        EXPECT_TRUE(same_signatures(before, after));
+        EXPECT_TRUE(after.manifold);
+        EXPECT_TRUE(after.oriented);
+        // Reduced as one domain, the gyroid keeps one zero-area triangle of
+        // the 47 extraction made where it meets the cube's edges at nodes: its
+        // corners are open-border vertices, which border collapses may not
+        // pull off the border's corner. Domains must leave no more.
+        JobConfig single = mesh_job(field, true);
+        const Piece one = run_local(Job(single), {}).surface;
+        EXPECT_LE(after.degenerate_triangles, check_topology(one).degenerate_triangles);
+        EXPECT_LE(after.degenerate_triangles, 1);
+        EXPECT_LT(out.triangle_count(), raw.triangle_count());
+        EXPECT_TRUE(std::none_of(out.flags.begin(), out.flags.end(), [](std::uint8_t f) { return f & kLocked; }));
+        const double h = job.partition().spacing();
+        EXPECT_NEAR(h, mean_edge_length(whole), 1e-12);
+        EXPECT_LE(hausdorff(raw, out).symmetric, 0.5 * h);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Partitions, MeshPartitionCase, ::testing::ValuesIn(kCases),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+TEST(MeshPartition, MetisSplitsTheMeshOrItsAbsenceIsAClearError) {
+    const auto field = make_field("torus");
+    const Domain whole = cube(*field);
+    if (!have_metis()) {
+        EXPECT_THROW(partition_with_metis(whole, 6), Error);
+        return;
+    }
+    const std::vector<std::int32_t> part = partition_with_metis(whole, 6);
+    EXPECT_EQ(part, partition_with_metis(whole, 6)) << "METIS's parts differ between two calls";
+    const MeshPartition partition(whole, part, "METIS");
+    ASSERT_EQ(partition.domain_count(), 6);
+    for (int d = 0; d < 6; ++d) EXPECT_GT(partition.domain_tet_count(d), 0);
+
+    JobConfig config = mesh_job("torus", true);
+    config.domains = 6;
+    const Piece out = run_local(Job(config), {}).surface;
+    const Piece raw = extract(whole, static_cast<float>(field->default_level()));
+    EXPECT_TRUE(same_signatures(check_topology(raw), check_topology(out)));
+    EXPECT_THROW(partition_with_metis(whole, static_cast<int>(whole.tet_count()) + 1), Error);
+}
+
+TEST(MeshPartition, BadPartitionsAreClearErrors) {
+    const auto field = make_field("sphere");
+    const Domain whole = cube(*field);
+    const std::size_t tets = whole.tet_count();
+    const auto message = [&](const std::string& text) -> std::string {
+        const std::filesystem::path path = std::filesystem::temp_directory_path() / "tetiso_bad_partition";
+        std::ofstream(path) << text;
+        try {
+            read_partition(path, tets);
+        } catch (const Error& e) {
+            std::filesystem::remove(path);
+            return e.what();
+        }
+        std::filesystem::remove(path);
+        return "";
+    };
+    std::string ids;
+    for (std::size_t t = 0; t < tets; ++t) ids += "0\n";
+    EXPECT_EQ(message(ids), "");
+    EXPECT_NE(message(ids.substr(2)).find("16250 domain ids for the mesh's 16251"), std::string::npos);
+    EXPECT_NE(message(ids + "0\n").find("more domain ids than"), std::string::npos);
+    EXPECT_NE(message("-1\n" + ids.substr(2)).find("outside [0, 2^31)"), std::string::npos);
+    EXPECT_NE(message("0 1\n" + ids.substr(2)).find("2 fields"), std::string::npos);
+    EXPECT_NE(message("1.5\n" + ids.substr(2)).find(":1: domain id '1.5'"), std::string::npos);
+    EXPECT_EQ(message("# written by a solver\n" + ids), ""); // comments are no ids
+
+    // Ids with a gap leave a domain empty.
+    std::vector<std::int32_t> gap(tets, 0);
+    gap[0] = 2;
+    try {
+        MeshPartition(whole, gap, "gap.part");
+        ADD_FAILURE() << "a partition with an empty domain was accepted";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("gap.part: domain 1 has no tetrahedra"), std::string::npos) << e.what();
+    }
+
+    // A domain count that the file contradicts, and a partition for the lattice.
+    const PartitionFile file(grid_partition(whole, 2), "eight");
+    JobConfig config = mesh_job("sphere", false);
+    config.partition = file.path;
+    config.domains = 4;
+    EXPECT_THROW(Job{config}, Error);
+    config.domains = 8;
+    EXPECT_NO_THROW(Job{config});
+    JobConfig lattice;
+    lattice.lattice = 10;
+    lattice.partition = file.path;
+    EXPECT_THROW(Job{lattice}, Error);
+}
+
+} // namespace
+} // namespace tetiso
