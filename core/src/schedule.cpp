@@ -17,15 +17,15 @@ namespace tetiso {
 
 namespace {
 
-// Appends a copy of the bisection subtree under `node`, in depth-first
-// order; returns the copy's index.
-int copy_subtree(const std::vector<DomainTreeNode>& bisection, int node, std::vector<TaskNode>& tree) {
-    const DomainTreeNode& b = bisection[static_cast<std::size_t>(node)];
+// Appends a copy of the partition tree's subtree under `node`, in
+// depth-first order; returns the copy's index.
+int copy_subtree(const std::vector<DomainTreeNode>& partition_tree, int node, std::vector<TaskNode>& tree) {
+    const DomainTreeNode& b = partition_tree[static_cast<std::size_t>(node)];
     const int at = static_cast<int>(tree.size());
     tree.push_back(TaskNode{b.first, b.count, -1, -1});
     if (b.left >= 0) {
-        const int left = copy_subtree(bisection, b.left, tree);
-        const int right = copy_subtree(bisection, b.right, tree);
+        const int left = copy_subtree(partition_tree, b.left, tree);
+        const int right = copy_subtree(partition_tree, b.right, tree);
         tree[static_cast<std::size_t>(at)].left = left;
         tree[static_cast<std::size_t>(at)].right = right;
     }
@@ -34,14 +34,14 @@ int copy_subtree(const std::vector<DomainTreeNode>& bisection, int node, std::ve
 
 } // namespace
 
-std::vector<TaskNode> task_tree(const std::vector<DomainTreeNode>& bisection) {
+std::vector<TaskNode> task_tree(const std::vector<DomainTreeNode>& partition_tree) {
     // The subtrees hanging off the partition tree's rightmost path, in
     // domain order: each left child on the path, then the path's last leaf.
     std::vector<int> hanging;
     int node = 0;
-    while (bisection[static_cast<std::size_t>(node)].left >= 0) {
-        hanging.push_back(bisection[static_cast<std::size_t>(node)].left);
-        node = bisection[static_cast<std::size_t>(node)].right;
+    while (partition_tree[static_cast<std::size_t>(node)].left >= 0) {
+        hanging.push_back(partition_tree[static_cast<std::size_t>(node)].left);
+        node = partition_tree[static_cast<std::size_t>(node)].right;
     }
     hanging.push_back(node);
 
@@ -51,7 +51,7 @@ std::vector<TaskNode> task_tree(const std::vector<DomainTreeNode>& bisection) {
     const int seams = static_cast<int>(hanging.size()) - 1;
     std::vector<TaskNode> tree(static_cast<std::size_t>(seams));
     std::vector<int> subtree_root;
-    for (const int h : hanging) subtree_root.push_back(copy_subtree(bisection, h, tree));
+    for (const int h : hanging) subtree_root.push_back(copy_subtree(partition_tree, h, tree));
     for (int k = 0; k < seams; ++k) {
         const int joined = seams - k; // the subtree this seam adds
         const int rest = k + 1 < seams ? k + 1 : subtree_root[0];

@@ -3,9 +3,9 @@
 #include "tetiso/seam.hpp"
 
 #include <algorithm>
-#include <numeric>
 #include <bit>
 #include <chrono>
+#include <numeric>
 #include <string>
 
 #include "tetiso/error.hpp"
