@@ -167,6 +167,50 @@ inline double quality(Vec a, Vec b, Vec c, Vec* normal_out = nullptr) {
     return product > 0 ? area2 / std::sqrt(product) : 0.0;
 }
 
+// Whether triangles (a, b1, c1) and (a, b2, c2), with unit normals n1 and
+// n2, share a point other than their common corner a (they share no other
+// corner). Each triangle that crosses the other's plane does so along a
+// segment starting at a, on the line common to both planes; the triangles
+// overlap exactly when these segments leave a the same way. Triangles that
+// lie in one plane (within a millionth of their size: rounding leaves a
+// flat surface's corners that far apart) overlap when one's side or bisector
+// points strictly into the other's angle at a.
+inline bool overlap_at_corner(Vec a, Vec b1, Vec c1, Vec n1, Vec b2, Vec c2, Vec n2) {
+    const Vec eb1 = b1 - a, ec1 = c1 - a, eb2 = b2 - a, ec2 = c2 - a;
+    const double sb2 = dot(eb2, n1), sc2 = dot(ec2, n1);
+    if ((sb2 > 0 && sc2 > 0) || (sb2 < 0 && sc2 < 0)) {
+        const double flat = 1e-6 * std::sqrt(std::max(norm2(eb2), norm2(ec2)));
+        if (std::abs(sb2) > flat || std::abs(sc2) > flat) return false;
+    } else {
+        const double sb1 = dot(eb1, n2), sc1 = dot(ec1, n2);
+        if ((sb1 > 0 && sc1 > 0) || (sb1 < 0 && sc1 < 0)) return false;
+        const double flat = 1e-6 * std::sqrt(std::max({norm2(eb1), norm2(ec1), norm2(eb2), norm2(ec2)}));
+        const bool coplanar = std::abs(sb2) <= flat && std::abs(sc2) <= flat;
+        if (!coplanar && sb1 != sc1 && sb2 != sc2) {
+            const Vec x1 = eb1 + (sb1 / (sb1 - sc1)) * (ec1 - eb1);
+            const Vec x2 = eb2 + (sb2 / (sb2 - sc2)) * (ec2 - eb2);
+            return dot(x1, x2) > 0;
+        }
+    }
+    // One plane: compare the angles at a, turning about n1.
+    auto inside = [&](Vec d, Vec e, Vec f) {
+        const double turn = dot(cross(e, f), n1);
+        return dot(cross(e, d), n1) * turn > 0 && dot(cross(d, f), n1) * turn > 0;
+    };
+    auto bisector = [](Vec e, Vec f) { return (1.0 / norm(e)) * e + (1.0 / norm(f)) * f; };
+    return inside(eb2, eb1, ec1) || inside(ec2, eb1, ec1) || inside(bisector(eb2, ec2), eb1, ec1) ||
+           inside(eb1, eb2, ec2) || inside(ec1, eb2, ec2);
+}
+
+// Whether triangles (a, b, c), of unit normal n1, and (b, a, d), which share
+// edge (a, b), overlap: only when they lie in one plane with c and d on the
+// same side of the edge (the surface folded flat onto itself).
+inline bool overlap_at_edge(Vec a, Vec b, Vec c, Vec n1, Vec d) {
+    const Vec ab = b - a, ad = d - a;
+    if (std::abs(dot(ad, n1)) > 1e-6 * std::sqrt(std::max(norm2(ab), norm2(ad)))) return false;
+    return dot(cross(ab, c - a), cross(ab, ad)) > 0;
+}
+
 inline double point_segment_distance(Vec p, Vec a, Vec b) {
     const Vec ab = b - a;
     const double len2 = norm2(ab);
@@ -633,6 +677,84 @@ void build_geometry(const Surface& s, int threads, std::vector<FaceGeometry>& ge
     });
 }
 
+// Cones. Faces that share a corner must meet nowhere else: the normal tests
+// of a collapse see only the faces it replaces, and where the surface passes
+// close to a mesh node its sheets nearly touch, so that a collapse turning
+// each face by little can still push a fan through the sheet beside it (4
+// self-intersections, all between faces sharing a corner, in the paper
+// field's surface on a 491 K-tetrahedron TetGen mesh before this test).
+// Whether a vertex's faces meet only along shared edges is a property of its
+// fan alone: when all their normals lie within 90° of one direction m, seen
+// along m each face turns the same way about the vertex, and the fan is
+// embedded exactly when the faces turn once around it. An operation replaces
+// the faces of a run of the fan, between two of its edges, by faces between
+// the same two edges; if these also face m, each turns by less than a half
+// turn, so the run turns as far as before and the fan stays embedded. That
+// holds for any number of operations in a round that touch one fan (their
+// runs are disjoint), and needs for each new face only the cone of each of
+// its corners, not the faces around them, whose cache misses cost the first
+// version of this test a third of the reduction. A vertex's cone is flat
+// when all its faces lie more than kConeMargin inside the hemisphere around
+// their mean normal and, on the border, the fan turns less than once; where
+// it is not (degenerate faces, sharp corners), and at the border neighbours
+// of a border edge's collapse (whose run ends at a border edge that moves),
+// the faces around the vertex are tested one by one instead.
+struct Cone {
+    float x, y, z; // unit mean normal
+    u32 flat;
+};
+constexpr double kConeMargin = 1e-3;
+
+void build_cones(const Surface& s, const Fans& fans, const std::vector<FaceGeometry>& geometry, int threads,
+                 std::vector<Cone>& cones) {
+    const auto nv = static_cast<i32>(fans.off.size() - 1);
+    cones.resize(static_cast<std::size_t>(nv));
+    parallel_for(threads, nv, [&](i64 vi) {
+        const auto v = static_cast<std::size_t>(vi);
+        Cone& c = cones[v];
+        c = {0, 0, 0, 0};
+        const i32 begin = fans.off[v], end = fans.off[v + 1];
+        Vec m{0, 0, 0};
+        for (i32 slot = begin; slot < end; ++slot) {
+            const FaceGeometry& g = geometry[static_cast<std::size_t>(fans.face[static_cast<std::size_t>(slot)])];
+            if (!g.valid()) return;
+            m = m + g.n();
+        }
+        const double len = norm(m);
+        if (!(len > 0)) return;
+        m = (1.0 / len) * m;
+        c.x = static_cast<float>(m.x);
+        c.y = static_cast<float>(m.y);
+        c.z = static_cast<float>(m.z);
+        const Vec stored{c.x, c.y, c.z};
+        for (i32 slot = begin; slot < end; ++slot)
+            if (!(dot(geometry[static_cast<std::size_t>(fans.face[static_cast<std::size_t>(slot)])].n(), stored) >
+                  2 * kConeMargin))
+                return;
+        // A border fan must also turn less than once around the vertex, else
+        // it could wind over itself (stacked like a ramp) while every face
+        // faces m: its faces, in fan order, hold the direction of its first
+        // edge only in the first face's angle.
+        if (fans.border[v]) {
+            const Vec pv = s.pos(static_cast<i32>(vi));
+            Vec ray = s.pos(fans.next[static_cast<std::size_t>(begin)]) - pv; // the first face's first side
+            ray = ray - dot(ray, stored) * stored;
+            const Vec across = cross(stored, ray);
+            int holding = 0;
+            for (i32 slot = begin; slot < end; ++slot) {
+                const Vec ea = s.pos(fans.next[static_cast<std::size_t>(slot)]) - pv;
+                const Vec eb = s.pos(fans.prev[static_cast<std::size_t>(slot)]) - pv;
+                const double sa = slot == begin ? 0.0 : dot(ea, across), sb = dot(eb, across);
+                if (!(sa <= 0 && sb > 0)) continue;
+                const double t = sa / (sa - sb);
+                holding += dot(ea, ray) + t * (dot(eb, ray) - dot(ea, ray)) > 0;
+            }
+            if (holding != 1) return;
+        }
+        c.flat = 1;
+    });
+}
+
 // Distance from p to triangle (a, b, c) (Ericson, Real-Time Collision
 // Detection, 5.1.5). Inlined into the sample loops, which call it most of
 // all (13 % of a job's profile): 2 % off a job on the VM.
@@ -725,6 +847,9 @@ void build_geometry(const Surface& s, int threads, std::vector<FaceGeometry>& ge
 //    angle over the new faces is at least min(min_angle, the smallest angle
 //    over the old faces), so collapses that remove a degenerate face stay
 //    possible but none makes the worst angle of its region worse;
+//  - no new contact: faces that share a corner meet nowhere else, among the
+//    new faces and between them and the faces around their outer corners
+//    (see Cones); contacts the replaced faces had already do not count;
 //  - error: every vertex of this call's input is kept as a sample, frozen
 //    where it was and owned by one current face (see Samples). A collapse
 //    re-measures the samples of all faces of both leaves against the new
@@ -801,8 +926,9 @@ class Evaluator {
 public:
     // samples: null when there is no error bound.
     Evaluator(const Surface& s, const Fans& fans, const Edges& edges, const std::vector<FaceGeometry>& geometry,
-              const Samples* samples, const Params& params, int round)
-        : s_(s), fans_(fans), edges_(edges), geo_(geometry), samples_(samples), p_(params), round_(round) {}
+              const std::vector<Cone>& cones, const Samples* samples, const Params& params, int round)
+        : s_(s), fans_(fans), edges_(edges), geo_(geometry), cones_(cones), samples_(samples), p_(params),
+          round_(round) {}
 
     // with_w_slots: also find f1 and f2 in w's fan (a scan of its ring),
     // which only Φ and the legality tests read.
@@ -1119,8 +1245,10 @@ private:
         bool spoiled = false;
         for_each_leaf_face(r, [&](i32 slot, bool removed) {
             if (removed || spoiled) return;
-            const Vec a = s_.pos(fans_.next[static_cast<std::size_t>(slot)]);
-            const Vec b = s_.pos(fans_.prev[static_cast<std::size_t>(slot)]);
+            const i32 ia = fans_.next[static_cast<std::size_t>(slot)];
+            const i32 ib = fans_.prev[static_cast<std::size_t>(slot)];
+            __builtin_prefetch(&cones_[static_cast<std::size_t>(ia)]); // read by clear_of_neighbours
+            const Vec a = s_.pos(ia), b = s_.pos(ib);
             Vec n;
             const double q_new = quality(p, a, b, &n);
             const FaceGeometry& g = geo(face(slot));
@@ -1131,17 +1259,21 @@ private:
             if (faces < NewFan::kMax) {
                 fan.a[faces] = a;
                 fan.b[faces] = b;
+                fan.n[faces] = n;
+                fan.ia[faces] = ia;
+                fan.ib[faces] = ib;
+                fan.end[faces] = slot < r.ou + r.ku ? u : w;
                 fan.tri[faces] = face(slot);
             }
             ++faces;
         });
-        if (spoiled) return false;
+        if (spoiled || faces > NewFan::kMax) return false;
+        fan.count = faces;
         if (!samples_) {
+            if (!clear_of_neighbours(u, w, border_edge, fan)) return false;
             ops.err[i] = static_cast<float>(err_old + increment);
             return true;
         }
-        if (faces > NewFan::kMax) return false;
-        fan.n = faces;
         // On the border the polyline's 1D departure adds to the bounds it
         // replaces (the samples see only the 2D one).
         double worst = border_edge ? err_old + increment : 0.0;
@@ -1154,6 +1286,7 @@ private:
                 if (owner) placed.emplace_back(sample, t);
             }))
             return false;
+        if (!clear_of_neighbours(u, w, border_edge, fan)) return false;
         for (const auto& [sample, t] : placed) (*owner)[static_cast<std::size_t>(sample)] = t;
         ops.err[i] = static_cast<float>(worst);
         return true;
@@ -1186,10 +1319,185 @@ private:
     // tri[f] (the same index: apply() rewrites triangles in place).
     struct NewFan {
         static constexpr int kMax = 96;
-        Vec p, a[kMax], b[kMax];
-        i32 tri[kMax];
-        int n = 0;
+        Vec p, a[kMax], b[kMax], n[kMax]; // n: unit normal, zero when degenerate
+        i32 ia[kMax], ib[kMax], tri[kMax];
+        i32 end[kMax]; // the end, u or w, whose place p takes in this face
+        int count = 0;
     };
+
+    // A triangle for the contact tests: corners (vertex, position), unit
+    // normal (zero when degenerate).
+    struct Corners {
+        i32 id[3];
+        Vec at[3];
+        Vec n;
+    };
+
+    // Whether two faces that share a corner or an edge (by vertex, or by
+    // position where a mesh node made two vertices coincide) meet anywhere
+    // else. Faces with nothing in common, or degenerate ones, are not judged.
+    static bool touch(const Corners& f, const Corners& g) {
+        if (norm2(f.n) == 0 || norm2(g.n) == 0) return false;
+        int fi[3], gi[3], shared = 0;
+        for (int i = 0; i < 3 && shared < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                if (f.id[i] == g.id[j]) {
+                    fi[shared] = i;
+                    gi[shared++] = j;
+                    break;
+                }
+        if (shared == 0)
+            for (int i = 0; i < 3 && !shared; ++i)
+                for (int j = 0; j < 3 && !shared; ++j)
+                    if (f.at[i].x == g.at[j].x && f.at[i].y == g.at[j].y && f.at[i].z == g.at[j].z) {
+                        fi[0] = i;
+                        gi[0] = j;
+                        shared = 1;
+                    }
+        if (shared == 0) return false;
+        if (shared == 3) return true;
+        if (shared == 2) {
+            const int f3 = 3 - fi[0] - fi[1], g3 = 3 - gi[0] - gi[1];
+            return overlap_at_edge(f.at[fi[0]], f.at[fi[1]], f.at[f3], f.n, g.at[g3]);
+        }
+        const int f1 = (fi[0] + 1) % 3, f2 = (fi[0] + 2) % 3, g1 = (gi[0] + 1) % 3, g2 = (gi[0] + 2) % 3;
+        return overlap_at_corner(f.at[fi[0]], f.at[f1], f.at[f2], f.n, g.at[g1], g.at[g2], g.n);
+    }
+
+    // New face f of a collapse, and the face it replaces.
+    static Corners new_face(const NewFan& fan, int f) {
+        return {{-1, fan.ia[f], fan.ib[f]}, {fan.p, fan.a[f], fan.b[f]}, fan.n[f]};
+    }
+    Corners old_face(const NewFan& fan, int f) const {
+        Corners c{{fan.end[f], fan.ia[f], fan.ib[f]}, {s_.pos(fan.end[f]), fan.a[f], fan.b[f]}, {0, 0, 0}};
+        quality(c.at[0], c.at[1], c.at[2], &c.n);
+        return c;
+    }
+
+    // Whether the faces a collapse of (u, w) makes come into contact with
+    // no face that shares a corner with them, other than along that corner
+    // or edge: the new ones among themselves (the fan around p), and the
+    // faces around their outer corners (by cones where they settle it, see
+    // Cones). Where a fan is tested face by face, a contact the replaced
+    // faces had already is no new one: extraction leaves faces that touch
+    // along a line where the surface passes through a mesh node, and
+    // cleaning those up must stay possible. Faces that share no corner are
+    // not tested.
+    bool clear_of_neighbours(i32 u, i32 w, bool border_edge, const NewFan& fan) const {
+        if (!fan_at_p_embedded(fan))
+            for (int f = 0; f < fan.count; ++f) {
+                if (norm2(fan.n[f]) == 0) continue;
+                for (int g = f + 1; g < fan.count; ++g)
+                    if (!apart(fan.p, fan.n[f], fan.a[g], fan.b[g]) && touch(new_face(fan, f), new_face(fan, g)) &&
+                        !touch(old_face(fan, f), old_face(fan, g)))
+                        return false;
+            }
+        // Each outer corner v: a[f] of one new face and b[g] of another (on
+        // the border, the ends of the chain have one). Reading only v's cone
+        // settles it; the ring is read where the cone does not.
+        const i32 moved_a = border_edge ? border_other(u, w) : -1, moved_b = border_edge ? border_other(w, u) : -1;
+        for (int f = 0; f < fan.count; ++f)
+            for (const i32 v : {fan.ia[f], fan.ib[f]})
+                if ((v == moved_a || v == moved_b || !inside_cone(v, fan.n[f])) && !ring_clear(u, w, fan, v))
+                    return false;
+        return true;
+    }
+
+    // Whether new face normal n lies in the cone of v's fan (see Cones):
+    // then the faces replaced at v are replaced by faces on the same side,
+    // and v's fan stays embedded.
+    bool inside_cone(i32 v, Vec n) const {
+        const Cone& c = cones_[static_cast<std::size_t>(v)];
+        return c.flat && dot(n, {c.x, c.y, c.z}) > kConeMargin;
+    }
+
+    // Whether the new faces around p meet only along their shared edges:
+    // seen along the mean of their normals, each turns the same way about p
+    // and together they turn once around it (less, when p is on the border).
+    // That is counted on a ray along the first side of the first face (of
+    // the chain, on the border): the half-open angles [a, b) of the faces
+    // must hold it once. A closed fan turning k times holds every ray k
+    // times; an open one turning more than once holds its first side twice.
+    static bool fan_at_p_embedded(const NewFan& fan) {
+        Vec m{0, 0, 0};
+        for (int f = 0; f < fan.count; ++f) m = m + fan.n[f];
+        const double len = norm(m);
+        if (!(len > 0)) return false;
+        m = (1.0 / len) * m;
+        for (int f = 0; f < fan.count; ++f)
+            if (!(dot(fan.n[f], m) > kConeMargin)) return false;
+        int first = 0; // on the border: the face whose first side no face ends on
+        bool open = false;
+        for (int f = 0; f < fan.count && !open; ++f) {
+            bool follows = false;
+            for (int g = 0; g < fan.count && !follows; ++g) follows = fan.ib[g] == fan.ia[f];
+            if (!follows) first = f, open = true;
+        }
+        Vec ray = fan.a[first] - fan.p;
+        ray = ray - dot(ray, m) * m;
+        const Vec across = cross(m, ray);
+        // Each side is measured the same way in both faces that hold it, so
+        // that rounding cannot count the first side twice or not at all; on
+        // the border, the first side is the first face's own.
+        int holding = 0;
+        for (int f = 0; f < fan.count; ++f) {
+            const Vec ea = fan.a[f] - fan.p, eb = fan.b[f] - fan.p;
+            const double sa = open && f == first ? 0.0 : dot(ea, across), sb = dot(eb, across);
+            if (!(sa <= 0 && sb > 0)) continue;
+            const double t = sa / (sa - sb);
+            holding += dot(ea, ray) + t * (dot(eb, ray) - dot(ea, ray)) > 0;
+        }
+        return holding == 1;
+    }
+
+    // The exact test at outer corner v, for a cone that does not settle it:
+    // each face around v that the collapse leaves as it is, against each new
+    // face at v.
+    bool ring_clear(i32 u, i32 w, const NewFan& fan, i32 v) const {
+        int at_v[2], n_at_v = 0;
+        for (int f = 0; f < fan.count && n_at_v < 2; ++f)
+            if (fan.ia[f] == v || fan.ib[f] == v) at_v[n_at_v++] = f;
+        const Vec pv = s_.pos(v);
+        const i32 begin = fans_.off[static_cast<std::size_t>(v)], end = fans_.off[static_cast<std::size_t>(v) + 1];
+        for (i32 slot = begin; slot < end; ++slot) {
+            const i32 x = fans_.next[static_cast<std::size_t>(slot)];
+            const i32 y = fans_.prev[static_cast<std::size_t>(slot)];
+            if (x == u || x == w || y == u || y == w) continue; // a face the collapse replaces
+            const Vec px = s_.pos(x), py = s_.pos(y);
+            for (int j = 0; j < n_at_v; ++j) {
+                const int h = at_v[j];
+                if (norm2(fan.n[h]) == 0) continue;
+                const i32 o = fan.ia[h] == v ? fan.ib[h] : fan.ia[h];
+                const Vec po = fan.ia[h] == v ? fan.b[h] : fan.a[h];
+                bool overlap;
+                if (x == o || y == o) {
+                    // Across the edge (v, o): only a face folded flat onto h.
+                    const Vec third = x == o ? py : px;
+                    overlap = overlap_at_edge(pv, po, fan.p, fan.n[h], third) &&
+                              !overlap_at_edge(pv, po, s_.pos(fan.end[h]), old_face(fan, h).n, third);
+                } else {
+                    if (apart(pv, fan.n[h], px, py)) continue;
+                    Vec ng;
+                    if (!(quality(pv, px, py, &ng) > 0)) continue;
+                    overlap = overlap_at_corner(pv, fan.p, po, fan.n[h], px, py, ng) &&
+                              !touch(old_face(fan, h), Corners{{v, x, y}, {pv, px, py}, ng});
+                }
+                if (overlap) return false;
+            }
+        }
+        return true;
+    }
+
+    // Whether x and y lie clearly on one side of the plane through corner a
+    // of normal n: then a face (a, x, y) meets the face of that plane at a
+    // only (overlap_at_corner's first test, which settles most pairs).
+    static bool apart(Vec a, Vec n, Vec x, Vec y) {
+        const Vec ex = x - a, ey = y - a;
+        const double sx = dot(ex, n), sy = dot(ey, n);
+        if (!((sx > 0 && sy > 0) || (sx < 0 && sy < 0))) return false;
+        const double flat2 = 1e-12 * std::max(norm2(ex), norm2(ey));
+        return sx * sx > flat2 || sy * sy > flat2;
+    }
 
     // A sample's distance to triangle (a, b, c): its point's, or the largest
     // of its corners' (see Samples).
@@ -1226,7 +1534,7 @@ private:
                 }
                 if (at < 0) {
                     d = std::numeric_limits<double>::infinity();
-                    for (int f = 0; f < fan.n; ++f) {
+                    for (int f = 0; f < fan.count; ++f) {
                         const double df = sample_distance(sample, fan.p, fan.a[f], fan.b[f]);
                         if (df < d) {
                             d = df;
@@ -1285,6 +1593,11 @@ private:
         for (i32 j = 0, n = fans_.nn(c); j < n; ++j)
             if (fans_.nbr(c, j) == d) return false;
         if (s_.locked(c) && s_.locked(d)) return false; // see legal_collapse: no new locked-locked edge
+        // No face pushed through its neighbours (see Cones); where a cone
+        // does not settle it the flip, an improvement only, is not made.
+        if (!inside_cone(u, n1) || !inside_cone(c, n1) || !inside_cone(d, n1) || !inside_cone(w, n2) ||
+            !inside_cone(c, n2) || !inside_cone(d, n2))
+            return false;
         // Error: the gap between the two diagonals.
         const Vec axis = cross(pw - pu, pd - pc);
         const double axis_len = norm(axis);
@@ -1305,6 +1618,7 @@ private:
     const Fans& fans_;
     const Edges& edges_;
     const std::vector<FaceGeometry>& geo_;
+    const std::vector<Cone>& cones_;
     const Samples* samples_;
     const Params& p_;
     int round_;
@@ -1937,6 +2251,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     Fans fans;
     Edges edges;
     std::vector<FaceGeometry> geometry;
+    std::vector<Cone> cones;
     Ops ops;
     std::vector<i32> scratch_a, scratch_b, remap;
     Surface spare; // compact()'s second triangle and error arrays
@@ -1975,7 +2290,8 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         ops.resize(static_cast<std::size_t>(ne));
         refused.assign(static_cast<std::size_t>(ne), 0);
         if (samples.on()) samples.sort(geometry);
-        const Evaluator evaluator(s, fans, edges, geometry, samples.on() ? &samples : nullptr, params, round);
+        build_cones(s, fans, geometry, threads, cones);
+        const Evaluator evaluator(s, fans, edges, geometry, cones, samples.on() ? &samples : nullptr, params, round);
         parallel_for(threads, ne, [&](i64 ei) {
             const auto e = static_cast<std::size_t>(ei);
             if (known_refused(refused_slots, edges, e) && unchanged(fans, edges, changed, e)) ops.kind[e] = kQuiet;
