@@ -201,6 +201,15 @@ void place_vertex(const Domain& domain, float level, std::int32_t lo, std::int32
     const auto b = static_cast<std::size_t>(lo_first ? hi : lo);
     float t = (level - domain.f[a]) / (domain.f[b] - domain.f[a]);
     t = std::clamp(t, 0.0f, 1.0f);
+    // A crossing closer to a node than float resolves along its edge is the
+    // node itself. Interpolated from a node at coordinate 0 it would land a
+    // denormal-sized step off it instead (3e-16 on meshes/cube.1), so that
+    // the vertices of all edges through that node, which ought to coincide
+    // and be merged by the reducer's zero-length collapses, form a triangle
+    // too small for the float normal and not short against its own edges.
+    constexpr float kResolved = 0x1p-24f;
+    if (t < kResolved) t = 0.0f;
+    else if (t > 1.0f - kResolved) t = 1.0f;
     piece.x[vertex] = domain.x[a] + t * (domain.x[b] - domain.x[a]);
     piece.y[vertex] = domain.y[a] + t * (domain.y[b] - domain.y[a]);
     piece.z[vertex] = domain.z[a] + t * (domain.z[b] - domain.z[a]);
