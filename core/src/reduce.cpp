@@ -705,6 +705,46 @@ struct Cone {
 };
 constexpr double kConeMargin = 1e-3;
 
+// The most corners an operation may own (owned_corners); one that would own
+// more waits for a later round.
+constexpr int kMaxOwned = 12;
+
+// The corners whose fans a collapse of (u, w) tests face by face: its outer
+// corners whose cone is not flat, and on a border edge the border neighbours
+// of its ends. A chosen collapse owns them for the round: they join its ends
+// in every conflict (two operations conflict when the vertices of one lie
+// within path length 1 of the other's), so that no other operation of the
+// round changes a fan the test read face by face; the cones keep every other
+// fan embedded whatever the round does. Without this, 15 K of the 26 K
+// corners so tested in the reduction of the N = 100 paper surface had a fan
+// that another chosen operation changed in the same round. Returns the
+// count, or -1 when there are more than kMaxOwned.
+int owned_corners(const Fans& fans, const std::vector<Cone>& cones, i32 u, i32 w, bool border_edge, i32* out) {
+    int n = 0;
+    auto add = [&](i32 v) {
+        for (int k = 0; k < n; ++k)
+            if (out[k] == v) return true;
+        if (n == kMaxOwned) return false;
+        out[n++] = v;
+        return true;
+    };
+    for (const i32 end : {u, w})
+        for (i32 j = 0, m = fans.nn(end); j < m; ++j) {
+            const i32 v = fans.nbr(end, j);
+            if (v != u && v != w && !cones[static_cast<std::size_t>(v)].flat && !add(v)) return -1;
+        }
+    if (border_edge)
+        for (const auto& [end, other] : {std::pair{u, w}, std::pair{w, u}}) {
+            const i32 first = fans.nbr(end, 0), last = fans.nbr(end, fans.k(end));
+            if (!add(first == other ? last : first)) return -1;
+        }
+    return n;
+}
+
+// A tested operation: chosen, or refused (no possible operation), or legal
+// but blocked by a corner it would own that another chosen one claimed.
+enum class Verdict : u8 { kIllegal, kBlocked, kLegal };
+
 void build_cones(const Surface& s, const Fans& fans, const std::vector<FaceGeometry>& geometry, int threads,
                  std::vector<Cone>& cones) {
     const auto nv = static_cast<i32>(fans.off.size() - 1);
@@ -975,12 +1015,24 @@ public:
     // owner: where to move the samples of a legal collapse (its caller
     // chooses every operation this finds legal); null when there are no
     // samples.
-    bool legal(i32 e, Ops& ops, std::vector<i32>* owner) const {
+    // free_corners(owned, n): whether the corners the collapse would own
+    // are its to take (n = -1: too many); asked only of a legal collapse,
+    // which is blocked when they are not, its samples left where they were.
+    template <class FreeCorners>
+    Verdict legal(i32 e, Ops& ops, std::vector<i32>* owner, const FreeCorners& free_corners) const {
         const auto i = static_cast<std::size_t>(e);
-        if (ops.kind[i] == kFlip) return true; // fully tested in propose_flip
+        if (ops.kind[i] == kFlip) return Verdict::kLegal; // fully tested in propose_flip
         const EdgeSlots r = slots(e);
-        if (ops.kind[i] == kPending && !place_collapse(r, ops, i)) return false;
-        return legal_collapse(r, ops, i, owner);
+        if (ops.kind[i] == kPending && !place_collapse(r, ops, i)) return Verdict::kIllegal;
+        bool blocked = false;
+        if (legal_collapse(r, ops, i, owner, [&](bool border_edge) {
+                i32 owned[kMaxOwned];
+                const int n = owned_corners(fans_, cones_, r.u, r.w, border_edge, owned);
+                blocked = !free_corners(owned, n);
+                return !blocked;
+            }))
+            return Verdict::kLegal;
+        return blocked ? Verdict::kBlocked : Verdict::kIllegal;
     }
 
     // A flip for an interior edge with no collapse: kFlip when it gains
@@ -1184,7 +1236,8 @@ private:
         return set_collapse(ops, i, p, keep);
     }
 
-    bool legal_collapse(const EdgeSlots& r, Ops& ops, std::size_t i, std::vector<i32>* owner) const {
+    template <class Owns>
+    bool legal_collapse(const EdgeSlots& r, Ops& ops, std::size_t i, std::vector<i32>* owner, const Owns& owns) const {
         const i32 u = r.u, w = r.w, c = r.c, d = r.d;
         const bool border_edge = r.f1 < 0 || r.f2 < 0;
         // Link condition.
@@ -1270,7 +1323,7 @@ private:
         if (spoiled || faces > NewFan::kMax) return false;
         fan.count = faces;
         if (!samples_) {
-            if (!clear_of_neighbours(u, w, border_edge, fan)) return false;
+            if (!clear_of_neighbours(u, w, border_edge, fan) || !owns(border_edge)) return false;
             ops.err[i] = static_cast<float>(err_old + increment);
             return true;
         }
@@ -1286,7 +1339,7 @@ private:
                 if (owner) placed.emplace_back(sample, t);
             }))
             return false;
-        if (!clear_of_neighbours(u, w, border_edge, fan)) return false;
+        if (!clear_of_neighbours(u, w, border_edge, fan) || !owns(border_edge)) return false;
         for (const auto& [sample, t] : placed) (*owner)[static_cast<std::size_t>(sample)] = t;
         ops.err[i] = static_cast<float>(worst);
         return true;
@@ -1395,11 +1448,21 @@ private:
         // Each outer corner v: a[f] of one new face and b[g] of another (on
         // the border, the ends of the chain have one). Reading only v's cone
         // settles it; the ring is read where the cone does not.
+        // The corners tested face by face are those the collapse owns for the
+        // round (owned_corners): no other operation of the round changes
+        // their fans. Elsewhere a new face outside its corner's cone
+        // is refused (rare: 11 corners in the reduction of the N = 100 paper
+        // surface), as the cone argument needs every operation at that
+        // corner to keep to it.
         const i32 moved_a = border_edge ? border_other(u, w) : -1, moved_b = border_edge ? border_other(w, u) : -1;
         for (int f = 0; f < fan.count; ++f)
-            for (const i32 v : {fan.ia[f], fan.ib[f]})
-                if ((v == moved_a || v == moved_b || !inside_cone(v, fan.n[f])) && !ring_clear(u, w, fan, v))
+            for (const i32 v : {fan.ia[f], fan.ib[f]}) {
+                if (v == moved_a || v == moved_b || !cones_[static_cast<std::size_t>(v)].flat) {
+                    if (!ring_clear(u, w, fan, v)) return false;
+                } else if (!inside_cone(v, fan.n[f])) {
                     return false;
+                }
+            }
         return true;
     }
 
@@ -1660,6 +1723,8 @@ constexpr std::size_t kParallelSortMin = std::size_t{1} << 16;
 // the edge and its ends (read once, when it enters).
 struct WindowSlot {
     i32 rank, e, u, w;
+    i32 owned_count; // -1 until computed
+    i32 owned[kMaxOwned];
 };
 
 // The selection's working arrays, kept from round to round so that no round
@@ -1682,8 +1747,9 @@ struct SelectScratch {
 
 class Selector {
 public:
-    Selector(const Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, SelectScratch& scratch)
-        : s_(s), fans_(fans), edges_(edges), ops_(ops), scratch_(scratch) {}
+    Selector(const Surface& s, const Fans& fans, const Edges& edges, const Ops& ops, const std::vector<Cone>& cones,
+             SelectScratch& scratch)
+        : s_(s), fans_(fans), edges_(edges), ops_(ops), cones_(cones), scratch_(scratch) {}
 
     // True when operation a ranks above operation b (b may be -1).
     bool beats(i32 a, i32 b) const {
@@ -1709,8 +1775,10 @@ public:
     }
 
     // candidates: the edges with an operation, ascending. Sets chosen[e] for
-    // the operations chosen, refused[e] for those found illegal. legal(e)
-    // tests e, which is chosen if legal, and stores its sample placements.
+    // the operations chosen, refused[e] for those found illegal.
+    // legal(e, free_corners) tests e and gives its Verdict, storing the
+    // sample placements of one it finds legal; free_corners tells whether
+    // the corners e would own are its to take (Evaluator::legal).
     template <class Legal>
     void select(int threads, const std::vector<i32>& candidates, std::vector<u8>& chosen, std::vector<u8>& refused,
                 const Legal& legal) const {
@@ -1733,10 +1801,23 @@ public:
         });
     }
 
+    // Collapse e's owned corners (see owned_corners); flips own none (they
+    // are dropped where a cone does not decide).
+    int owned_corners(i32 e, i32* out) const {
+        const auto i = static_cast<std::size_t>(e);
+        if (ops_.kind[i] == kFlip) return 0;
+        return tetiso::owned_corners(fans_, cones_, edges_.v0[i], edges_.v1[i], edges_.border(fans_, e), out);
+    }
+
     // clear() for a collapse, whose ends are known.
     bool clear_collapse(i32 u, i32 w) const {
         return scratch_.claimed[static_cast<std::size_t>(u)] != stamp_ &&
                scratch_.claimed[static_cast<std::size_t>(w)] != stamp_;
+    }
+    bool clear_owned(const i32* owned, int n) const {
+        for (int k = 0; k < n; ++k)
+            if (scratch_.claimed[static_cast<std::size_t>(owned[k])] == stamp_) return false;
+        return true;
     }
 
     // Whether no vertex operation e touches lies within path length 1 of an
@@ -1791,10 +1872,10 @@ private:
             }
             const i32 e = order[k];
             if (!clear_collapse(ends[k].first, ends[k].second)) continue;
-            if (!legal(e)) {
-                refused[static_cast<std::size_t>(e)] = 1;
-                continue;
-            }
+            const Verdict verdict =
+                legal(e, [&](const i32* owned, int n) { return n >= 0 && clear_owned(owned, n); });
+            if (verdict == Verdict::kIllegal) refused[static_cast<std::size_t>(e)] = 1;
+            if (verdict != Verdict::kLegal) continue;
             chosen[static_cast<std::size_t>(e)] = kChosen;
             claim_around(e);
         }
@@ -1829,11 +1910,14 @@ private:
         reservation.assign(static_cast<std::size_t>(s_.vertices()), kNoReservation);
         window.clear();
         const std::size_t width = std::max<std::size_t>(kReservationWindowMin, n / kReservationSteps);
-        constexpr u8 kReserved = 1, kDecided = 2, kTaken = 4;
+        // kTestOnly: blocked by a corner it would own, claimed by an earlier
+        // choice (or owning too many); tested only to tell refused from
+        // blocked, as the sweep does.
+        constexpr u8 kReserved = 1, kDecided = 2, kTaken = 4, kTestOnly = 8;
         std::size_t next = 0;
         while (next < n || !window.empty()) {
             while (window.size() < width && next < n) {
-                window.push_back({static_cast<i32>(next), order[next], -1, -1});
+                window.push_back({static_cast<i32>(next), order[next], -1, -1, -1, {}});
                 ++next;
             }
             const i64 nw = static_cast<i64>(window.size());
@@ -1845,29 +1929,45 @@ private:
                     slot.w = edges_.v1[static_cast<std::size_t>(slot.e)];
                 }
                 if (!clear_collapse(slot.u, slot.w)) return; // blocked: decided for good
+                if (slot.owned_count < 0) slot.owned_count = owned_corners(slot.e, slot.owned);
+                if (slot.owned_count < 0 || !clear_owned(slot.owned, slot.owned_count)) {
+                    state[static_cast<std::size_t>(wi)] = kTestOnly;
+                    return;
+                }
                 state[static_cast<std::size_t>(wi)] = kReserved;
-                for (const i32 v : {slot.u, slot.w}) {
+                for_each_footprint(slot, [&](i32 v) {
                     std::atomic_ref<i32> held(reservation[static_cast<std::size_t>(v)]);
                     i32 current = held.load(std::memory_order_relaxed);
                     while (slot.rank < current &&
                            !held.compare_exchange_weak(current, slot.rank, std::memory_order_relaxed)) {
                     }
-                }
+                });
             }, kParallelMinWindow);
             parallel_for_tests(threads, nw, [&](i64 wi) {
                 u8& st = state[static_cast<std::size_t>(wi)];
                 if (!st) return;
                 const WindowSlot& slot = window[static_cast<std::size_t>(wi)];
-                // Its own ends first: a shared end is the commonest conflict.
-                if (reservation[static_cast<std::size_t>(slot.u)] != slot.rank ||
-                    reservation[static_cast<std::size_t>(slot.w)] != slot.rank)
+                if (st == kTestOnly) {
+                    if (legal(slot.e, [](const i32*, int) { return false; }) == Verdict::kIllegal)
+                        refused[static_cast<std::size_t>(slot.e)] = 1;
                     return;
-                for (const i32 end : {slot.u, slot.w})
-                    for (i32 j = 0, m = fans_.nn(end); j < m; ++j)
-                        if (reservation[static_cast<std::size_t>(fans_.nbr(end, j))] < slot.rank)
-                            return; // an earlier operation nearby is undecided
+                }
+                // Its own vertices first: a shared end is the commonest conflict.
+                bool first = true;
+                for_each_footprint(slot, [&](i32 v) {
+                    first = first && reservation[static_cast<std::size_t>(v)] == slot.rank;
+                });
+                if (!first) return;
+                bool nearby = false; // an earlier operation nearby is undecided
+                for_each_footprint(slot, [&](i32 v) {
+                    for (i32 j = 0, m = fans_.nn(v); j < m && !nearby; ++j)
+                        nearby = reservation[static_cast<std::size_t>(fans_.nbr(v, j))] < slot.rank;
+                });
+                if (nearby) return;
                 st |= kDecided;
-                if (!legal(slot.e)) {
+                // Its owned corners were clear when it reserved them, and only
+                // an earlier operation, all decided now, could have claimed them.
+                if (legal(slot.e, [](const i32*, int) { return true; }) != Verdict::kLegal) {
                     refused[static_cast<std::size_t>(slot.e)] = 1;
                     return;
                 }
@@ -1876,11 +1976,12 @@ private:
             });
             parallel_for(threads, nw, [&](i64 wi) {
                 const u8 st = state[static_cast<std::size_t>(wi)];
-                if (!st) return;
+                if (!st || st == kTestOnly) return;
                 const WindowSlot& slot = window[static_cast<std::size_t>(wi)];
-                for (const i32 v : {slot.u, slot.w})
+                for_each_footprint(slot, [&](i32 v) {
                     std::atomic_ref<i32>(reservation[static_cast<std::size_t>(v)])
                         .store(kNoReservation, std::memory_order_relaxed);
+                });
                 if (st & kTaken) claim_around(slot.e);
             }, kParallelMinWindow);
             // The waiting keep their order, ahead of the operations still to
@@ -1984,17 +2085,28 @@ private:
     const Fans& fans_;
     const Edges& edges_;
     const Ops& ops_;
+    const std::vector<Cone>& cones_;
     void claim(i32 v) const {
         std::atomic_ref<i32>(scratch_.claimed[static_cast<std::size_t>(v)]).store(stamp_, std::memory_order_relaxed);
     }
-    // Claims the closed 1-ring of every vertex chosen operation e touches.
+    // Claims the closed 1-ring of every vertex chosen operation e touches
+    // and of every corner it owns.
     void claim_around(i32 e) const {
-        i32 vs[4];
-        const int n = touched(e, vs);
+        i32 vs[4 + kMaxOwned];
+        int n = touched(e, vs);
+        n += std::max(0, owned_corners(e, vs + n));
         for (int i = 0; i < n; ++i) {
             claim(vs[i]);
             for (i32 j = 0, m = fans_.nn(vs[i]); j < m; ++j) claim(fans_.nbr(vs[i], j));
         }
+    }
+
+    // A window operation's ends, then its owned corners.
+    template <class F>
+    static void for_each_footprint(const WindowSlot& slot, const F& f) {
+        f(slot.u);
+        f(slot.w);
+        for (int k = 0; k < slot.owned_count; ++k) f(slot.owned[k]);
     }
 
     SelectScratch& scratch_;
@@ -2312,9 +2424,11 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         // Collapses. The selection places a pending collapse (Φ, position)
         // only when it reaches it unblocked: most are blocked by a chosen
         // neighbour and never need their Φ this round.
-        const Selector selector(s, fans, edges, ops, select_scratch);
+        const Selector selector(s, fans, edges, ops, cones, select_scratch);
         selector.select(threads, candidate_list, chosen, refused,
-                        [&](i32 e) { return evaluator.legal(e, ops, samples.on() ? &samples.owner : nullptr); });
+                        [&](i32 e, const auto& free_corners) {
+                            return evaluator.legal(e, ops, samples.on() ? &samples.owner : nullptr, free_corners);
+                        });
         // Flips: for the interior edges with no collapse that no chosen
         // collapse blocks. refused[e] (set by the selection for a collapse
         // found impossible or illegal) ends as "no operation is possible on
