@@ -54,6 +54,7 @@ using i64 = std::int64_t;
 using u32 = std::uint32_t;
 using u64 = std::uint64_t;
 using u8 = std::uint8_t;
+using u16 = std::uint16_t;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -701,7 +702,8 @@ void build_geometry(const Surface& s, int threads, std::vector<FaceGeometry>& ge
 // the faces around the vertex are tested one by one instead.
 struct Cone {
     float x, y, z; // unit mean normal
-    u32 flat;
+    u16 flat;
+    u16 beside_sharp; // a neighbour's cone is not flat
 };
 constexpr double kConeMargin = 1e-3;
 
@@ -720,6 +722,9 @@ constexpr int kMaxOwned = 12;
 // that another chosen operation changed in the same round. Returns the
 // count, or -1 when there are more than kMaxOwned.
 int owned_corners(const Fans& fans, const std::vector<Cone>& cones, i32 u, i32 w, bool border_edge, i32* out) {
+    if (!border_edge && !cones[static_cast<std::size_t>(u)].beside_sharp &&
+        !cones[static_cast<std::size_t>(w)].beside_sharp)
+        return 0;
     int n = 0;
     auto add = [&](i32 v) {
         for (int k = 0; k < n; ++k)
@@ -792,6 +797,15 @@ void build_cones(const Surface& s, const Fans& fans, const std::vector<FaceGeome
             if (holding != 1) return;
         }
         c.flat = 1;
+    });
+    // Few cones are not flat: their neighbours are marked from them, so that
+    // most collapses learn that they own no corner from their two ends.
+    parallel_for(threads, nv, [&](i64 vi) {
+        const auto v = static_cast<std::size_t>(vi);
+        if (cones[v].flat) return;
+        for (i32 j = 0, m = fans.nn(static_cast<i32>(vi)); j < m; ++j)
+            std::atomic_ref<u16>(cones[static_cast<std::size_t>(fans.nbr(static_cast<i32>(vi), j))].beside_sharp)
+                .store(1, std::memory_order_relaxed);
     });
 }
 
@@ -1806,7 +1820,10 @@ public:
     int owned_corners(i32 e, i32* out) const {
         const auto i = static_cast<std::size_t>(e);
         if (ops_.kind[i] == kFlip) return 0;
-        return tetiso::owned_corners(fans_, cones_, edges_.v0[i], edges_.v1[i], edges_.border(fans_, e), out);
+        const i32 u = edges_.v0[i], w = edges_.v1[i];
+        const bool border_edge = fans_.border[static_cast<std::size_t>(u)] &&
+                                 fans_.border[static_cast<std::size_t>(w)] && edges_.border(fans_, e);
+        return tetiso::owned_corners(fans_, cones_, u, w, border_edge, out);
     }
 
     // clear() for a collapse, whose ends are known.
