@@ -699,7 +699,8 @@ void build_geometry(const Surface& s, int threads, std::vector<FaceGeometry>& ge
 // their mean normal and, on the border, the fan turns less than once; where
 // it is not (degenerate faces, sharp corners), and at the border neighbours
 // of a border edge's collapse (whose run ends at a border edge that moves),
-// the faces around the vertex are tested one by one instead.
+// the faces around the vertex are tested one by one instead, by a collapse
+// that owns the vertex for the round (owned_corners).
 struct Cone {
     float x, y, z; // unit mean normal
     u16 flat;
