@@ -701,6 +701,19 @@ void build_geometry(const Surface& s, int threads, std::vector<FaceGeometry>& ge
 // of a border edge's collapse (whose run ends at a border edge that moves),
 // the faces around the vertex are tested one by one instead, by a collapse
 // that owns the vertex for the round (owned_corners).
+// Whether the half-open angle [a, b) at a fan's apex, seen along m (the
+// sides ea, eb taken from the apex), holds the ray `ray` (perpendicular to
+// m); across = m x ray. starts_on_ray: a is the ray's own side, counted as
+// on it whatever rounding says. A fan whose faces all turn the same way
+// about the apex turns once around it exactly when one of its angles holds
+// the ray along the first side of its first face.
+inline bool holds_ray(Vec ea, Vec eb, Vec ray, Vec across, bool starts_on_ray) {
+    const double sa = starts_on_ray ? 0.0 : dot(ea, across), sb = dot(eb, across);
+    if (!(sa <= 0 && sb > 0)) return false;
+    const double t = sa / (sa - sb);
+    return dot(ea, ray) + t * (dot(eb, ray) - dot(ea, ray)) > 0;
+}
+
 struct Cone {
     float x, y, z; // unit mean normal
     u16 flat;
@@ -787,14 +800,9 @@ void build_cones(const Surface& s, const Fans& fans, const std::vector<FaceGeome
             ray = ray - dot(ray, stored) * stored;
             const Vec across = cross(stored, ray);
             int holding = 0;
-            for (i32 slot = begin; slot < end; ++slot) {
-                const Vec ea = s.pos(fans.next[static_cast<std::size_t>(slot)]) - pv;
-                const Vec eb = s.pos(fans.prev[static_cast<std::size_t>(slot)]) - pv;
-                const double sa = slot == begin ? 0.0 : dot(ea, across), sb = dot(eb, across);
-                if (!(sa <= 0 && sb > 0)) continue;
-                const double t = sa / (sa - sb);
-                holding += dot(ea, ray) + t * (dot(eb, ray) - dot(ea, ray)) > 0;
-            }
+            for (i32 slot = begin; slot < end; ++slot)
+                holding += holds_ray(s.pos(fans.next[static_cast<std::size_t>(slot)]) - pv,
+                                     s.pos(fans.prev[static_cast<std::size_t>(slot)]) - pv, ray, across, slot == begin);
             if (holding != 1) return;
         }
         c.flat = 1;
@@ -1518,13 +1526,8 @@ private:
         // that rounding cannot count the first side twice or not at all; on
         // the border, the first side is the first face's own.
         int holding = 0;
-        for (int f = 0; f < fan.count; ++f) {
-            const Vec ea = fan.a[f] - fan.p, eb = fan.b[f] - fan.p;
-            const double sa = open && f == first ? 0.0 : dot(ea, across), sb = dot(eb, across);
-            if (!(sa <= 0 && sb > 0)) continue;
-            const double t = sa / (sa - sb);
-            holding += dot(ea, ray) + t * (dot(eb, ray) - dot(ea, ray)) > 0;
-        }
+        for (int f = 0; f < fan.count; ++f)
+            holding += holds_ray(fan.a[f] - fan.p, fan.b[f] - fan.p, ray, across, open && f == first);
         return holding == 1;
     }
 
