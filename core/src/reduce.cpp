@@ -771,7 +771,7 @@ void build_cones(const Surface& s, const Fans& fans, const std::vector<FaceGeome
     parallel_for(threads, nv, [&](i64 vi) {
         const auto v = static_cast<std::size_t>(vi);
         Cone& c = cones[v];
-        c = {0, 0, 0, 0};
+        c = {0, 0, 0, 0, 0};
         const i32 begin = fans.off[v], end = fans.off[v + 1];
         Vec m{0, 0, 0};
         for (i32 slot = begin; slot < end; ++slot) {
