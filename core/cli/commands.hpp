@@ -19,6 +19,7 @@ void add_extract_command(CLI::App& app, Command& run);
 void add_check_command(CLI::App& app, Command& run);
 void add_run_command(CLI::App& app, Command& run);
 void add_reduce_command(CLI::App& app, Command& run);
+void add_split_command(CLI::App& app, Command& run);
 
 // --phi, shared by every command that reduces.
 void add_phi_option(CLI::App& cmd, double& phi);

@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
     tetiso::cli::add_check_command(app, run);
     tetiso::cli::add_run_command(app, run);
     tetiso::cli::add_reduce_command(app, run);
+    tetiso::cli::add_split_command(app, run);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

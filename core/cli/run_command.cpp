@@ -122,9 +122,10 @@ void run_job(const RunArguments& args) {
         {"command", "run"},
         {"lattice", c.lattice},
         {"mesh", c.mesh.string()},
-        {"partition", c.mesh.empty() ? "bisection" : c.partition.empty() ? "METIS" : c.partition.string()},
+        {"split", c.split.string()},
+        {"partition", !c.split.empty() ? "as split" : c.mesh.empty() ? "bisection" : c.partition.empty() ? "METIS" : c.partition.string()},
         {"domains", partition.domain_count()},
-        {"field", c.attribute ? "attribute " + std::to_string(*c.attribute) : c.field},
+        {"field", !c.split.empty() ? "as split" : c.attribute ? "attribute " + std::to_string(*c.attribute) : c.field},
         {"level", job.level()},
         {"reduce", c.reduce},
         {"phi", c.reduce_options.phi},
@@ -160,6 +161,10 @@ void add_run_command(CLI::App& app, Command& run) {
     CLI::Option* mesh = cmd->add_option("--mesh", job.mesh,
                                         "TetGen mesh BASE (reads BASE.node and BASE.ele) instead of the lattice");
     lattice->excludes(mesh);
+    CLI::Option* split = cmd->add_option("--split", job.split,
+                                         "A mesh written by `tetiso split` (a directory): each rank reads only the "
+                                         "domains it works on; the field and its level come with it");
+    split->excludes(lattice)->excludes(mesh);
     cmd->add_option("--partition", job.partition,
                     "With --mesh: each tetrahedron's domain, one id per line in .ele order, ids from 0 "
                     "(as METIS's mpmetis writes BASE.epart.D; default: METIS splits the mesh into --domains)")
@@ -170,7 +175,8 @@ void add_run_command(CLI::App& app, Command& run) {
                                ->check(CLI::PositiveNumber);
     cmd->add_option("--field", job.field,
                     std::string("Built-in field (") + builtin_field_names() + ") or an expression in x, y, z")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->excludes(split);
     cmd->add_option_function<int>(
            "--attribute", [args](int k) { args->job.attribute = k; },
            "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
@@ -201,9 +207,10 @@ void add_run_command(CLI::App& app, Command& run) {
     cmd->add_option("--report", args->report, "Write a JSON report (totals and one record per task) here");
     cmd->add_flag("--quiet", args->quiet, "No progress lines on stderr");
     cmd->callback([&run, args, domains] {
-        if (args->job.lattice == 0 && args->job.mesh.empty()) throw CLI::ValidationError("give --lattice N or --mesh BASE");
-        // With a partition file the count is the file's, unless one is asked for.
-        if (!args->job.partition.empty() && domains->count() == 0) args->job.domains = 0;
+        if (args->job.lattice == 0 && args->job.mesh.empty() && args->job.split.empty())
+            throw CLI::ValidationError("give --lattice N, --mesh BASE or --split DIR");
+        // With a partition file or a split the count is theirs, unless one is asked for.
+        if ((!args->job.partition.empty() || !args->job.split.empty()) && domains->count() == 0) args->job.domains = 0;
         run = [args] { run_job(*args); };
     });
 }

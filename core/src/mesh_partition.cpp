@@ -344,6 +344,23 @@ MeshPartition::MeshPartition(Domain mesh, const std::vector<std::int32_t>& part,
                        .value();
 }
 
+std::unique_ptr<MeshPartition> partition_mesh(const TetgenSource& source, const std::filesystem::path& partition_file,
+                                              int domains) {
+    Domain mesh = read_tetgen(source);
+    if (!partition_file.empty()) {
+        std::vector<std::int32_t> part = read_partition(partition_file, mesh.tet_count());
+        auto partition = std::make_unique<MeshPartition>(std::move(mesh), part, partition_file.string());
+        if (domains != 0 && domains != partition->domain_count())
+            throw Error(partition_file.string() + ": " + std::to_string(partition->domain_count()) +
+                        " domains, where " + std::to_string(domains) + " were asked for");
+        return partition;
+    }
+    if (domains < 1) throw Error("domain count must be at least 1, got " + std::to_string(domains));
+    std::vector<std::int32_t> part = partition_with_metis(mesh, domains);
+    return std::make_unique<MeshPartition>(std::move(mesh), part,
+                                           domains == 1 ? std::string("the whole mesh") : std::string("METIS"));
+}
+
 std::int64_t MeshPartition::domain_tet_count(int domain) const {
     const auto d = static_cast<std::size_t>(domain);
     return tets_first_.at(d + 1) - tets_first_.at(d);

@@ -10,6 +10,7 @@
 #include "tetiso/extract.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/mesh_partition.hpp"
+#include "tetiso/mesh_split.hpp"
 #include "tetiso/seam.hpp"
 #include "tetiso/tetgen.hpp"
 
@@ -67,36 +68,37 @@ std::vector<TaskNode> task_tree(const std::vector<DomainTreeNode>& partition_tre
 namespace {
 
 std::unique_ptr<Partition> make_partition(const JobConfig& config, std::unique_ptr<Field> field) {
-    if (config.mesh.empty() == (config.lattice == 0)) throw Error("give either a lattice size or a mesh");
+    if ((config.lattice != 0) + !config.mesh.empty() + !config.split.empty() != 1)
+        throw Error("give one of a lattice size, a mesh or a split mesh");
+    if (!config.split.empty()) {
+        if (!config.partition.empty()) throw Error("a split mesh is partitioned already: no partition file applies");
+        if (config.attribute) throw Error("a split mesh holds its field values: no node attribute applies");
+        auto split = std::make_unique<SplitMeshPartition>(config.split);
+        if (config.domains != 0 && config.domains != split->domain_count())
+            throw Error(config.split.string() + ": " + std::to_string(split->domain_count()) + " domains, where " +
+                        std::to_string(config.domains) + " were asked for");
+        return split;
+    }
     if (config.mesh.empty()) {
         if (!config.partition.empty()) throw Error("a partition file applies to a mesh, not to the lattice");
         if (config.attribute) throw Error("a node attribute as the field needs a mesh");
         return std::make_unique<LatticePartition>(config.lattice, config.domains, std::move(field));
     }
-    Domain mesh = read_tetgen(TetgenSource{config.mesh, config.attribute, field.get()});
-    if (!config.partition.empty()) {
-        std::vector<std::int32_t> part = read_partition(config.partition, mesh.tet_count());
-        auto partition = std::make_unique<MeshPartition>(std::move(mesh), part, config.partition.string());
-        if (config.domains != 0 && config.domains != partition->domain_count())
-            throw Error(config.partition.string() + ": " + std::to_string(partition->domain_count()) +
-                        " domains, where " + std::to_string(config.domains) + " were asked for");
-        return partition;
-    }
-    if (config.domains < 1) throw Error("domain count must be at least 1, got " + std::to_string(config.domains));
-    std::vector<std::int32_t> part = partition_with_metis(mesh, config.domains);
-    return std::make_unique<MeshPartition>(std::move(mesh), part,
-                                           config.domains == 1 ? std::string("the whole mesh") : std::string("METIS"));
+    return partition_mesh(TetgenSource{config.mesh, config.attribute, field.get()}, config.partition, config.domains);
 }
 
 } // namespace
 
 Job::Job(const JobConfig& config) : config_(config) {
     std::unique_ptr<Field> field = make_field(config.field);
-    // An attribute has no level of its own; an analytic field does.
-    const double level = config.level.value_or(config.attribute ? 0.0 : field->default_level());
+    // An attribute has no level of its own; an analytic field does, and a
+    // split mesh keeps the one it was written with.
+    double default_level = config.attribute ? 0.0 : field->default_level();
+    partition_ = make_partition(config, std::move(field));
+    if (const auto* split = dynamic_cast<const SplitMeshPartition*>(partition_.get())) default_level = split->default_level();
+    const double level = config.level.value_or(default_level);
     if (!std::isfinite(level)) throw Error("isosurface level is not a finite number");
     level_ = static_cast<float>(level);
-    partition_ = make_partition(config, std::move(field));
     tree_ = task_tree(partition_->tree());
     reduce_options_ = config.reduce_options;
     if (config.max_error_spacings > 0) reduce_options_.max_error = config.max_error_spacings * partition_->spacing();

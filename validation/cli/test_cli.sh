@@ -78,6 +78,32 @@ else
 fi
 expect 2 "missing partition file" -- "$tetiso" run --mesh "$meshes/cube.1" --partition "$work/none.part" -o "$out/t.ply"
 
+# The mesh split once into one file per domain: the job over the split is the
+# job over the mesh, byte for byte; and what goes wrong with a split is said.
+"$tetiso" split --mesh "$meshes/cube.1" --partition "$work/three.part" --field torus --quiet -o "$work/split3" &&
+    "$tetiso" run --split "$work/split3" --quiet -o "$work/split3.ply" &&
+    "$tetiso" run --mesh "$meshes/cube.1" --partition "$work/three.part" --field torus --quiet -o "$work/mesh3.ply"
+if [ $? -eq 0 ] && cmp -s "$work/split3.ply" "$work/mesh3.ply"; then
+    passed=$((passed + 1))
+else
+    echo "FAIL: the job over a split differs from the job over the mesh"; failures=$((failures + 1))
+fi
+expect 2 "split without --domains or --partition" -- "$tetiso" split --mesh "$meshes/cube.1" -o "$out/s"
+expect 2 "split of a missing mesh" -- "$tetiso" split --mesh "$out/none" --domains 2 -o "$out/s"
+expect 2 "split into a directory that holds files" -- "$tetiso" split --mesh "$meshes/cube.1" --partition "$work/three.part" -o "$work/split3"
+expect 2 "run over a missing split" -- "$tetiso" run --split "$work/none" -o "$out/t.ply"
+expect 2 "run over a split with --field" -- "$tetiso" run --split "$work/split3" --field paper -o "$out/t.ply"
+expect 2 "run over a split with --mesh" -- "$tetiso" run --split "$work/split3" --mesh "$meshes/cube.1" -o "$out/t.ply"
+cp -r "$work/split3" "$work/damaged"
+python3 -c "
+import sys; p = sys.argv[1]; b = bytearray(open(p, 'rb').read()); b[len(b) // 2] ^= 1; open(p, 'wb').write(b)" "$work/damaged/domain-1.tetiso"
+expect 2 "run over a split with a damaged domain file" -- "$tetiso" run --split "$work/damaged" --quiet -o "$out/t.ply"
+if grep -q "damaged/domain-1.tetiso: damaged" "$work/stderr"; then
+    passed=$((passed + 1))
+else
+    echo "FAIL: a damaged domain file's error does not name it: $(cat "$work/stderr")"; failures=$((failures + 1))
+fi
+
 # A level outside the range: an empty surface, said so on stderr, exit 0.
 "$tetiso" extract --lattice 10 --field sphere --level 50 -o "$work/empty.ply" 2>"$work/stderr"
 if [ $? -eq 0 ] && grep -q "outside the field's range" "$work/stderr" && [ -s "$work/empty.ply" ]; then

@@ -5,7 +5,9 @@
 // domains, and the job's surface equal to the whole mesh's extraction
 // (unreduced) or of its topology (reduced), for partitions made here
 // independently of METIS: octants, a 3 x 3 x 3 grid and a scatter in which
-// every domain is hundreds of pieces.
+// every domain is hundreds of pieces. The same partitions written as one
+// file per domain (core/src/mesh_split.cpp) give the same domains and the
+// same job surface, bit for bit, and damaged files are refused by name.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -22,6 +24,7 @@
 #include "tetiso/extract.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/mesh_partition.hpp"
+#include "tetiso/mesh_split.hpp"
 #include "tetiso/schedule.hpp"
 #include "tetiso/tetgen.hpp"
 
@@ -244,6 +247,69 @@ TEST_P(MeshPartitionCase, ReducedSurfaceKeepsTheTopologyForAnyThreadCount) {
     }
 }
 
+// Written as one file per domain and read back, a partition is the same in
+// everything a job reads, and the job over the split comes out bit for bit
+// as the job over the whole mesh.
+TEST_P(MeshPartitionCase, SplitIntoFilesIsTheSamePartitionAndJob) {
+    const test::ScratchDirectory scratch("tetiso_split");
+    const auto field = make_field("torus");
+    const Domain whole = cube(*field);
+    const std::vector<std::int32_t> part = GetParam().make(whole);
+    const MeshPartition partition(whole, part, GetParam().name);
+    const std::filesystem::path dir = scratch.at("split");
+    write_mesh_split(partition, field->default_level(), dir);
+    const SplitMeshPartition split(dir);
+
+    ASSERT_EQ(split.domain_count(), partition.domain_count());
+    EXPECT_EQ(split.node_count(), partition.node_count());
+    EXPECT_EQ(split.tet_count(), partition.tet_count());
+    EXPECT_EQ(split.spacing(), partition.spacing());
+    EXPECT_EQ(split.fingerprint(), partition.fingerprint());
+    EXPECT_EQ(split.default_level(), field->default_level());
+    ASSERT_EQ(split.tree().size(), partition.tree().size());
+    for (std::size_t i = 0; i < split.tree().size(); ++i) {
+        const DomainTreeNode &a = split.tree()[i], &b = partition.tree()[i];
+        EXPECT_TRUE(a.first == b.first && a.count == b.count && a.left == b.left && a.right == b.right) << "tree node " << i;
+    }
+    std::size_t shared = 0;
+    for (int d = 0; d < split.domain_count(); ++d) {
+        SCOPED_TRACE(d);
+        EXPECT_EQ(split.neighbours(d), partition.neighbours(d));
+        EXPECT_EQ(split.domain_name(d), partition.domain_name(d));
+        const Domain a = split.make_domain(d), b = partition.make_domain(d);
+        EXPECT_EQ(a.id, b.id);
+        EXPECT_TRUE(test::same_bits(a.x, b.x) && test::same_bits(a.y, b.y) && test::same_bits(a.z, b.z) &&
+                    test::same_bits(a.f, b.f));
+        EXPECT_EQ(a.gid, b.gid);
+        EXPECT_EQ(a.interface, b.interface);
+        EXPECT_EQ(a.shared_edges, b.shared_edges);
+        EXPECT_EQ(a.tets, b.tets);
+        for (const EdgeKey key : a.shared_edges) {
+            const auto holders = split.domains_of_edge(edge_key_low(key), edge_key_high(key));
+            ASSERT_GE(holders.size(), 2u);
+            ASSERT_EQ(holders, partition.domains_of_edge(edge_key_low(key), edge_key_high(key)));
+        }
+        shared += a.shared_edges.size();
+    }
+    EXPECT_GT(shared, 0u);
+
+    const PartitionFile file(part, GetParam().name);
+    JobConfig over_mesh = mesh_job("torus", true);
+    over_mesh.partition = file.path;
+    over_mesh.domains = 0;
+    JobConfig over_split;
+    over_split.split = dir;
+    over_split.domains = 0;
+    const Piece expected = run_local(Job(over_mesh), {}).surface;
+    const Piece out = run_local(Job(over_split), {}).surface;
+    ASSERT_GT(out.triangle_count(), 50u);
+    EXPECT_EQ(out.key, expected.key);
+    EXPECT_TRUE(test::same_bits(out.x, expected.x) && test::same_bits(out.y, expected.y) &&
+                test::same_bits(out.z, expected.z));
+    EXPECT_EQ(out.flags, expected.flags);
+    EXPECT_EQ(out.triangles, expected.triangles);
+}
+
 INSTANTIATE_TEST_SUITE_P(Partitions, MeshPartitionCase, ::testing::ValuesIn(kCases),
                          [](const auto& info) { return std::string(info.param.name); });
 
@@ -316,6 +382,80 @@ TEST(MeshPartition, BadPartitionsAreClearErrors) {
     lattice.lattice = 10;
     lattice.partition = file.path;
     EXPECT_THROW(Job{lattice}, Error);
+}
+
+// What a reader of a split meets when its files are not what the index
+// says: each a tetiso::Error naming the file, never a crash or a domain
+// quietly built from the wrong bytes; and a split is never written over
+// another directory's contents.
+TEST(MeshSplit, DamagedOrMismatchedFilesAreClearErrors) {
+    const test::ScratchDirectory scratch("tetiso_split_damaged");
+    const auto field = make_field("sphere");
+    const Domain whole = cube(*field);
+    const MeshPartition partition(whole, grid_partition(whole, 2), "octants");
+    const std::filesystem::path dir = scratch.at("split");
+    write_mesh_split(partition, field->default_level(), dir);
+    const auto message = [](const auto& action) -> std::string {
+        try {
+            action();
+        } catch (const Error& e) {
+            return e.what();
+        }
+        return "";
+    };
+    const auto write_bytes = [](const std::filesystem::path& path, const std::string& bytes) {
+        std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
+    };
+    const std::filesystem::path index = split_index_file(dir), domain1 = split_domain_file(dir, 1);
+    const std::string index_bytes = test::read_bytes(index), domain1_bytes = test::read_bytes(domain1);
+    const SplitMeshPartition split(dir);
+
+    // One bit flipped anywhere in a domain file.
+    for (const std::size_t at : {std::size_t{3}, std::size_t{40}, domain1_bytes.size() / 2, domain1_bytes.size() - 1}) {
+        std::string damaged = domain1_bytes;
+        damaged[at] = static_cast<char>(damaged[at] ^ 0x10);
+        write_bytes(domain1, damaged);
+        const std::string text = message([&] { split.make_domain(1); });
+        EXPECT_NE(text.find(domain1.string()), std::string::npos) << at << ": " << text;
+        EXPECT_TRUE(text.find("damaged") != std::string::npos || text.find("not a tetiso") != std::string::npos) << text;
+    }
+    // Another domain's file, sound in itself, in its place; then none.
+    std::filesystem::copy_file(split_domain_file(dir, 2), domain1, std::filesystem::copy_options::overwrite_existing);
+    EXPECT_NE(message([&] { split.make_domain(1); }).find("not the file that"), std::string::npos);
+    std::filesystem::remove(domain1);
+    EXPECT_NE(message([&] { split.make_domain(1); }).find(domain1.string() + ": cannot open"), std::string::npos);
+    write_bytes(domain1, domain1_bytes);
+    EXPECT_NO_THROW(split.make_domain(1));
+
+    // The index truncated, or of another format version (its digest made to
+    // fit, so that the version check itself is what answers).
+    write_bytes(index, index_bytes.substr(0, index_bytes.size() / 2));
+    EXPECT_NE(message([&] { SplitMeshPartition{dir}; }).find(index.string() + ": damaged"), std::string::npos);
+    std::string other_version = index_bytes.substr(0, index_bytes.size() - 8);
+    other_version[8] = 2;
+    const std::uint64_t digest = Digest().add(other_version.data(), other_version.size()).value();
+    other_version.append(reinterpret_cast<const char*>(&digest), sizeof(digest));
+    write_bytes(index, other_version);
+    EXPECT_NE(message([&] { SplitMeshPartition{dir}; }).find("format version 2"), std::string::npos);
+    write_bytes(index, index_bytes);
+
+    // A split goes only to a new or empty directory; the old one is left as it was.
+    EXPECT_NE(message([&] { write_mesh_split(partition, 0.0, dir); }).find("not an empty directory"), std::string::npos);
+    EXPECT_EQ(test::read_bytes(index), index_bytes);
+
+    // A job over a split takes no partition file, field attribute or other count.
+    JobConfig config;
+    config.split = dir;
+    config.domains = 7;
+    EXPECT_NE(message([&] { Job{config}; }).find("8 domains, where 7"), std::string::npos);
+    config.domains = 0;
+    config.attribute = 0;
+    EXPECT_THROW(Job{config}, Error);
+    config.attribute.reset();
+    config.lattice = 10;
+    EXPECT_THROW(Job{config}, Error);
+    config.lattice = 0;
+    EXPECT_EQ(Job{config}.level(), static_cast<float>(field->default_level()));
 }
 
 } // namespace

@@ -21,18 +21,21 @@
 // tree node covers a range of ids, as the job's task tree requires;
 // source_id() gives the partition's own id of each.
 //
-// The whole mesh is held (each rank of a job reads it): this suits meshes
-// that fit one node's memory. Meshes beyond that come as one file per domain
-// from the solver, which tetiso does not read yet.
+// The whole mesh is held (each rank of a job that runs over it reads it):
+// this suits meshes that fit one node's memory. Beyond that, a partition is
+// written once as one file per domain (mesh_split.hpp), and a job's ranks
+// read only the domains they work on.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "tetiso/mesh.hpp"
 #include "tetiso/partition.hpp"
+#include "tetiso/tetgen.hpp"
 
 namespace tetiso {
 
@@ -52,6 +55,15 @@ bool have_metis();
 // METIS fails, or if it leaves a part empty (more parts than the mesh can
 // give).
 std::vector<std::int32_t> partition_with_metis(const Domain& mesh, int domains);
+
+class MeshPartition;
+
+// The mesh of `source` split by the partition file `partition_file` (its
+// domain count must be `domains` unless that is 0) or, without one, into
+// `domains` parts by METIS. Throws tetiso::Error for a mesh or partition that
+// cannot be read or used, naming the file.
+std::unique_ptr<MeshPartition> partition_mesh(const TetgenSource& source, const std::filesystem::path& partition_file,
+                                              int domains);
 
 class MeshPartition final : public Partition {
 public:

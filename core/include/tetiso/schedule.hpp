@@ -35,7 +35,10 @@ struct JobConfig {
     std::int64_t lattice = 0;        // N of the N^3 lattice
     std::filesystem::path mesh;      // TetGen BASE (BASE.node, BASE.ele), instead of the lattice
     std::filesystem::path partition; // with mesh: each tetrahedron's domain, one id per line
-    int domains = 1;                 // D; with a partition file, 0 or its count
+    // Or a mesh split into one file per domain (mesh_split.hpp): a rank
+    // reads only the domains it works on, and the field and level come with it.
+    std::filesystem::path split;
+    int domains = 1;                 // D; with a partition file or a split, 0 or its count
     std::string field = "paper";     // built-in name or expression
     std::optional<int> attribute;    // with mesh: the field is this node attribute instead
     std::optional<double> level;     // default: the field's own (0 for an attribute)

@@ -1,0 +1,71 @@
+// `tetiso split`: partition a TetGen mesh once and write one file per domain,
+// so that `tetiso run --split DIR` never holds the whole mesh on any rank.
+#include <iostream>
+#include <memory>
+#include <optional>
+
+#include "commands.hpp"
+#include "tetiso/error.hpp"
+#include "tetiso/field.hpp"
+#include "tetiso/mesh_partition.hpp"
+#include "tetiso/mesh_split.hpp"
+
+namespace tetiso::cli {
+namespace {
+
+struct SplitArguments {
+    std::filesystem::path mesh, partition, output;
+    int domains = 0;
+    std::string field = "paper";
+    std::optional<int> attribute;
+    bool quiet = false;
+};
+
+void run_split(const SplitArguments& args) {
+    std::error_code ec;
+    if (std::filesystem::exists(args.output, ec) &&
+        (!std::filesystem::is_directory(args.output, ec) || !std::filesystem::is_empty(args.output, ec)))
+        throw Error(args.output.string() + ": exists and is not an empty directory; a split is written only to a new one");
+    const std::unique_ptr<Field> field = make_field(args.field);
+    const auto partition = partition_mesh(TetgenSource{args.mesh, args.attribute, field.get()}, args.partition, args.domains);
+    const double level = args.attribute ? 0.0 : field->default_level();
+    write_mesh_split(*partition, level, args.output);
+    if (!args.quiet)
+        std::cerr << "tetiso split: " << partition->node_count() << " nodes, " << partition->tet_count()
+                  << " tetrahedra in " << partition->domain_count() << " domains written to " << args.output.string()
+                  << '\n';
+}
+
+} // namespace
+
+void add_split_command(CLI::App& app, Command& run) {
+    auto args = std::make_shared<SplitArguments>();
+    CLI::App* cmd = app.add_subcommand(
+        "split", "Partition a TetGen mesh and write one file per domain, for `tetiso run --split` (no rank of "
+                 "that job holds the whole mesh)");
+    cmd->add_option("--mesh", args->mesh, "TetGen mesh BASE (reads BASE.node and BASE.ele)")->required();
+    CLI::Option* partition =
+        cmd->add_option("--partition", args->partition,
+                        "Each tetrahedron's domain, one id per line in .ele order, ids from 0 (as METIS's mpmetis "
+                        "writes BASE.epart.D; default: METIS splits the mesh into --domains)");
+    CLI::Option* domains =
+        cmd->add_option("--domains", args->domains, "Number of domains (with --partition: its count, if given)")
+            ->check(CLI::PositiveNumber);
+    cmd->add_option("--field", args->field,
+                    std::string("Built-in field (") + builtin_field_names() +
+                        ") or an expression in x, y, z, evaluated at the nodes and stored")
+        ->capture_default_str();
+    cmd->add_option_function<int>(
+           "--attribute", [args](int k) { args->attribute = k; },
+           "The field is node attribute K of BASE.node (default: --field at the nodes)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("-o,--output", args->output, "Directory to write (new, or empty)")->required();
+    cmd->add_flag("--quiet", args->quiet, "No summary line on stderr");
+    cmd->callback([&run, args, partition, domains] {
+        if (partition->count() == 0 && domains->count() == 0)
+            throw CLI::ValidationError("give --domains D (METIS) or --partition FILE");
+        run = [args] { run_split(*args); };
+    });
+}
+
+} // namespace tetiso::cli

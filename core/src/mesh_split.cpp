@@ -1,0 +1,323 @@
+// A mesh stored as one file per domain (see mesh_split.hpp): writing a
+// MeshPartition out, and the partition that reads it back piecewise.
+#include "tetiso/mesh_split.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <type_traits>
+#include <utility>
+
+#include "io_formats.hpp"
+#include "tetiso/error.hpp"
+#include "tetiso/io.hpp"
+
+namespace tetiso {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "split files are little-endian, as is this machine's memory");
+
+// Eight bytes each: which kind of file, and the format's version (bumped
+// whenever the layout changes, so that an old file is refused by name).
+constexpr char kIndexMagic[8] = {'T', 'E', 'T', 'I', 'S', 'O', 'I', 'X'};
+constexpr char kDomainMagic[8] = {'T', 'E', 'T', 'I', 'S', 'O', 'D', 'M'};
+constexpr std::uint32_t kVersion = 1;
+
+// A file's bytes built up in memory, then written whole with the digest of
+// everything before it at the end.
+class ByteWriter {
+public:
+    template <class T>
+    void put(const T& value) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        bytes_.append(reinterpret_cast<const char*>(&value), sizeof(T));
+    }
+    template <class T>
+    void put_array(const std::vector<T>& values) {
+        put(static_cast<std::uint64_t>(values.size()));
+        bytes_.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+    }
+    void put_string(const std::string& text) {
+        put(static_cast<std::uint64_t>(text.size()));
+        bytes_.append(text);
+    }
+    // The digest written last, which the index keeps for a domain file.
+    std::uint64_t write(const std::filesystem::path& path) {
+        const std::uint64_t digest = Digest().add(bytes_.data(), bytes_.size()).value();
+        put(digest);
+        std::ofstream out(path, std::ios::binary | std::ios::trunc);
+        out.write(bytes_.data(), static_cast<std::streamsize>(bytes_.size()));
+        out.close();
+        if (!out) throw Error(path.string() + ": cannot write");
+        return digest;
+    }
+
+private:
+    std::string bytes_;
+};
+
+// Reads back what ByteWriter wrote, checking each count against the bytes
+// left before allocating anything, so a damaged count is an error, not an
+// allocation of terabytes.
+class ByteReader {
+public:
+    ByteReader(std::filesystem::path path, const char (&magic)[8], const char* what)
+        : path_(std::move(path)), bytes_(detail::read_whole_file(path_)) {
+        if (bytes_.size() < sizeof(magic) + sizeof(std::uint32_t) + sizeof(std::uint64_t) ||
+            std::memcmp(bytes_.data(), magic, sizeof(magic)) != 0)
+            fail(std::string("not a tetiso ") + what + " file");
+        end_ = bytes_.size() - sizeof(std::uint64_t);
+        std::memcpy(&digest_, bytes_.data() + end_, sizeof(digest_));
+        if (Digest().add(bytes_.data(), end_).value() != digest_)
+            fail("damaged: its contents do not match its digest");
+        at_ = sizeof(magic);
+        if (const auto version = get<std::uint32_t>(); version != kVersion)
+            fail("format version " + std::to_string(version) + ", where this tetiso reads version " +
+                 std::to_string(kVersion));
+    }
+
+    template <class T>
+    T get() {
+        static_assert(std::is_trivially_copyable_v<T>);
+        need(sizeof(T), "a value");
+        T value;
+        std::memcpy(&value, bytes_.data() + at_, sizeof(T));
+        at_ += sizeof(T);
+        return value;
+    }
+    template <class T>
+    std::vector<T> get_array(const char* name) {
+        const auto count = get<std::uint64_t>();
+        if (count > (end_ - at_) / sizeof(T)) fail(std::string("truncated in ") + name);
+        std::vector<T> values(static_cast<std::size_t>(count));
+        std::memcpy(values.data(), bytes_.data() + at_, values.size() * sizeof(T));
+        at_ += values.size() * sizeof(T);
+        return values;
+    }
+    std::string get_string(const char* name) {
+        const auto size = get<std::uint64_t>();
+        if (size > end_ - at_) fail(std::string("truncated in ") + name);
+        std::string text(bytes_.data() + at_, static_cast<std::size_t>(size));
+        at_ += text.size();
+        return text;
+    }
+    // Called after the last field: trailing bytes mean a layout this reader
+    // does not know.
+    void finish() {
+        if (at_ != end_) fail(std::to_string(end_ - at_) + " bytes after the last field");
+        std::string().swap(bytes_);
+    }
+    std::uint64_t digest() const { return digest_; }
+    [[noreturn]] void fail(const std::string& what) const { throw Error(path_.string() + ": " + what); }
+
+private:
+    void need(std::size_t size, const char* what) const {
+        if (size > end_ - at_) fail(std::string("truncated in ") + what);
+    }
+
+    std::filesystem::path path_;
+    std::string bytes_;
+    std::size_t at_ = 0, end_ = 0;
+    std::uint64_t digest_ = 0;
+};
+
+// Offsets into a list of rows: first[0] = 0, non-decreasing, last = size.
+bool valid_offsets(const std::vector<std::int64_t>& first, std::size_t rows, std::size_t size) {
+    if (first.size() != rows + 1 || first.front() != 0 || static_cast<std::size_t>(first.back()) != size) return false;
+    return std::is_sorted(first.begin(), first.end());
+}
+
+} // namespace
+
+std::filesystem::path split_index_file(const std::filesystem::path& dir) { return dir / "index.tetiso"; }
+
+std::filesystem::path split_domain_file(const std::filesystem::path& dir, int domain) {
+    return dir / ("domain-" + std::to_string(domain) + ".tetiso");
+}
+
+void write_mesh_split(const MeshPartition& partition, double default_level, const std::filesystem::path& dir) {
+    std::error_code ec;
+    if (std::filesystem::exists(dir, ec) &&
+        (!std::filesystem::is_directory(dir, ec) || !std::filesystem::is_empty(dir, ec)))
+        throw Error(dir.string() + ": exists and is not an empty directory; a split is written only to a new one");
+    const std::filesystem::path temporary = detail::temporary_sibling(dir);
+    try {
+        if (!std::filesystem::create_directory(temporary, ec) || ec)
+            throw Error(dir.string() + ": cannot write: " + (ec ? ec.message() : std::string("cannot create ") + temporary.string()));
+        const int domains = partition.domain_count();
+        std::vector<std::uint64_t> digests(static_cast<std::size_t>(domains));
+        std::vector<std::string> names(static_cast<std::size_t>(domains));
+        std::vector<EdgeKey> shared_keys;
+        std::vector<std::int64_t> shared_first{0};
+        std::vector<std::int32_t> shared_domains;
+        {
+            // Every shared edge once, with its domains: gathered from the
+            // domains' lists, a key's holders are the domains that list it.
+            std::vector<std::pair<EdgeKey, std::int32_t>> held;
+            for (int d = 0; d < domains; ++d) {
+                const Domain domain = partition.make_domain(d);
+                for (const EdgeKey key : domain.shared_edges) held.emplace_back(key, d);
+                ByteWriter out;
+                out.put(kDomainMagic);
+                out.put(kVersion);
+                out.put(static_cast<std::int32_t>(d));
+                out.put_array(domain.x);
+                out.put_array(domain.y);
+                out.put_array(domain.z);
+                out.put_array(domain.f);
+                out.put_array(domain.gid);
+                out.put_array(domain.interface);
+                out.put_array(domain.shared_edges);
+                out.put_array(domain.tets);
+                digests[static_cast<std::size_t>(d)] = out.write(split_domain_file(temporary, d));
+                names[static_cast<std::size_t>(d)] = partition.domain_name(d);
+            }
+            std::sort(held.begin(), held.end());
+            for (std::size_t i = 0; i < held.size(); ++i) {
+                if (i == 0 || held[i].first != held[i - 1].first) {
+                    if (i > 0) shared_first.push_back(static_cast<std::int64_t>(shared_domains.size()));
+                    shared_keys.push_back(held[i].first);
+                }
+                shared_domains.push_back(held[i].second);
+            }
+            if (!held.empty()) shared_first.push_back(static_cast<std::int64_t>(shared_domains.size()));
+        }
+        ByteWriter index;
+        index.put(kIndexMagic);
+        index.put(kVersion);
+        index.put(static_cast<std::int32_t>(domains));
+        index.put(partition.node_count());
+        index.put(partition.tet_count());
+        index.put(partition.spacing());
+        index.put(default_level);
+        index.put(partition.fingerprint());
+        index.put_array(partition.tree());
+        std::vector<std::int64_t> neighbour_first{0};
+        std::vector<std::int32_t> neighbour_list;
+        for (int d = 0; d < domains; ++d) {
+            for (const int n : partition.neighbours(d)) neighbour_list.push_back(n);
+            neighbour_first.push_back(static_cast<std::int64_t>(neighbour_list.size()));
+        }
+        index.put_array(neighbour_first);
+        index.put_array(neighbour_list);
+        index.put_array(shared_keys);
+        index.put_array(shared_first);
+        index.put_array(shared_domains);
+        for (const std::string& name : names) index.put_string(name);
+        index.put_array(digests);
+        index.write(split_index_file(temporary));
+        std::filesystem::rename(temporary, dir, ec);
+        if (ec) throw Error(dir.string() + ": cannot write: " + ec.message());
+    } catch (...) {
+        std::error_code ignored;
+        std::filesystem::remove_all(temporary, ignored);
+        throw;
+    }
+}
+
+SplitMeshPartition::SplitMeshPartition(std::filesystem::path dir) : dir_(std::move(dir)) {
+    ByteReader in(split_index_file(dir_), kIndexMagic, "split index");
+    const auto domains = in.get<std::int32_t>();
+    if (domains < 1) in.fail("domain count " + std::to_string(domains) + " is not positive");
+    const auto d_count = static_cast<std::size_t>(domains);
+    node_count_ = in.get<std::int64_t>();
+    tet_count_ = in.get<std::int64_t>();
+    spacing_ = in.get<double>();
+    default_level_ = in.get<double>();
+    fingerprint_ = in.get<std::uint64_t>();
+    if (node_count_ < 0 || tet_count_ < 0) in.fail("negative node or tetrahedron count");
+    if (!(spacing_ >= 0) || !std::isfinite(spacing_) || !std::isfinite(default_level_))
+        in.fail("spacing or level is not a finite number");
+    tree_ = in.get_array<DomainTreeNode>("the merge tree");
+    // A tree over D leaves has 2D - 1 nodes; each covers a range of domains,
+    // and an inner node's children come after it and cover its two halves.
+    if (tree_.size() != 2 * d_count - 1) in.fail("a merge tree of " + std::to_string(tree_.size()) + " nodes for " + std::to_string(domains) + " domains");
+    for (std::size_t i = 0; i < tree_.size(); ++i) {
+        const DomainTreeNode& n = tree_[i];
+        const bool leaf = n.left < 0 && n.right < 0;
+        const bool range_ok = n.first >= 0 && n.count >= 1 && n.first <= domains - n.count;
+        const auto child = [&](int c) { return c > static_cast<int>(i) && c < static_cast<int>(tree_.size()); };
+        bool ok = range_ok && (leaf ? n.count == 1 : child(n.left) && child(n.right));
+        if (ok && !leaf) {
+            const DomainTreeNode &l = tree_[static_cast<std::size_t>(n.left)], &r = tree_[static_cast<std::size_t>(n.right)];
+            ok = l.first == n.first && r.first == l.first + l.count && l.count + r.count == n.count;
+        }
+        if (!ok) in.fail("merge tree node " + std::to_string(i) + " is malformed");
+    }
+    if (tree_.front().first != 0 || tree_.front().count != domains) in.fail("the merge tree's root does not cover every domain");
+    const auto neighbour_first = in.get_array<std::int64_t>("the neighbours");
+    const auto neighbour_list = in.get_array<std::int32_t>("the neighbours");
+    if (!valid_offsets(neighbour_first, d_count, neighbour_list.size())) in.fail("the neighbour lists are malformed");
+    neighbours_.resize(d_count);
+    for (std::size_t d = 0; d < d_count; ++d) {
+        neighbours_[d].assign(neighbour_list.begin() + neighbour_first[d], neighbour_list.begin() + neighbour_first[d + 1]);
+        for (const int n : neighbours_[d])
+            if (n < 0 || n >= domains || n == static_cast<int>(d)) in.fail("domain " + std::to_string(d) + " has neighbour " + std::to_string(n));
+        if (!std::is_sorted(neighbours_[d].begin(), neighbours_[d].end())) in.fail("domain " + std::to_string(d) + "'s neighbours are not sorted");
+    }
+    shared_keys_ = in.get_array<EdgeKey>("the shared edges");
+    shared_first_ = in.get_array<std::int64_t>("the shared edges");
+    shared_domains_ = in.get_array<std::int32_t>("the shared edges");
+    if (!valid_offsets(shared_first_, shared_keys_.size(), shared_domains_.size()) ||
+        std::adjacent_find(shared_keys_.begin(), shared_keys_.end(), std::greater_equal<>()) != shared_keys_.end())
+        in.fail("the shared edges are malformed");
+    for (std::size_t e = 0; e < shared_keys_.size(); ++e) {
+        const auto first = shared_domains_.begin() + shared_first_[e], last = shared_domains_.begin() + shared_first_[e + 1];
+        if (last - first < 2 || !std::is_sorted(first, last) || *first < 0 || *(last - 1) >= domains)
+            in.fail("shared edge " + std::to_string(e) + " does not list two or more domains in range");
+    }
+    names_.resize(d_count);
+    for (std::string& name : names_) name = in.get_string("the domain names");
+    domain_digests_ = in.get_array<std::uint64_t>("the domain digests");
+    if (domain_digests_.size() != d_count) in.fail("digests for " + std::to_string(domain_digests_.size()) + " domains, where it has " + std::to_string(domains));
+    in.finish();
+}
+
+std::vector<int> SplitMeshPartition::domains_of_edge(GlobalId a, GlobalId b) const {
+    if (a < 0 || b < 0 || a > kMaxGlobalId || b > kMaxGlobalId) return {};
+    const EdgeKey key = edge_key(a, b);
+    const auto found = std::lower_bound(shared_keys_.begin(), shared_keys_.end(), key);
+    if (found == shared_keys_.end() || *found != key) return {};
+    const auto e = static_cast<std::size_t>(found - shared_keys_.begin());
+    return {shared_domains_.begin() + shared_first_[e], shared_domains_.begin() + shared_first_[e + 1]};
+}
+
+std::string SplitMeshPartition::domain_name(int domain) const { return names_.at(static_cast<std::size_t>(domain)); }
+
+Domain SplitMeshPartition::make_domain(int domain) const {
+    if (domain < 0 || domain >= domain_count())
+        throw Error("no domain " + std::to_string(domain) + " in the split " + dir_.string() + " of " +
+                    std::to_string(domain_count()));
+    ByteReader in(split_domain_file(dir_, domain), kDomainMagic, "split domain");
+    if (in.digest() != domain_digests_[static_cast<std::size_t>(domain)])
+        in.fail("not the file that " + split_index_file(dir_).string() + " lists for domain " + std::to_string(domain) +
+                " (from another split?)");
+    if (const auto id = in.get<std::int32_t>(); id != domain) in.fail("holds domain " + std::to_string(id));
+    Domain out;
+    out.id = domain;
+    out.x = in.get_array<float>("the positions");
+    out.y = in.get_array<float>("the positions");
+    out.z = in.get_array<float>("the positions");
+    out.f = in.get_array<float>("the field values");
+    out.gid = in.get_array<GlobalId>("the global ids");
+    out.interface = in.get_array<std::uint8_t>("the interface marks");
+    out.shared_edges = in.get_array<EdgeKey>("the shared edges");
+    out.tets = in.get_array<std::int32_t>("the tetrahedra");
+    in.finish();
+    const std::size_t n = out.gid.size();
+    if (out.x.size() != n || out.y.size() != n || out.z.size() != n || out.f.size() != n || out.interface.size() != n)
+        in.fail("its node arrays differ in length");
+    if (out.tets.size() % 4 != 0) in.fail("its tetrahedra are not four corners each");
+    for (const std::int32_t v : out.tets)
+        if (v < 0 || static_cast<std::size_t>(v) >= n) in.fail("a tetrahedron refers to node " + std::to_string(v) + " of " + std::to_string(n));
+    for (const GlobalId g : out.gid)
+        if (g < 0 || g >= node_count_) in.fail("global id " + std::to_string(g) + " outside the mesh's " + std::to_string(node_count_) + " nodes");
+    if (!std::is_sorted(out.shared_edges.begin(), out.shared_edges.end())) in.fail("its shared edges are not sorted");
+    return out;
+}
+
+} // namespace tetiso
