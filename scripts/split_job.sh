@@ -32,7 +32,7 @@ cmp -s "$work/mesh.ply" "$work/split.ply" && same=yes || same=no
 python3 - "$work" "$split_seconds" "$same" <<'PY'
 import json, sys
 work, split_seconds, same = sys.argv[1], float(sys.argv[2]), sys.argv[3]
-print(f"tetiso split: {split_seconds:.2f} s, {sum(1 for _ in open(work + '/rss-split.jsonl'))} ranks; same surface: {same}")
+print(f"tetiso split: {split_seconds:.2f} s; same surface: {same}")
 for mode in ("mesh", "split"):
     r = json.load(open(f"{work}/{mode}.json"))
     peaks = sorted(json.loads(l)["peak_rss_kib"] / 1024 for l in open(f"{work}/rss-{mode}.jsonl"))
