@@ -9,6 +9,8 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <memory>
+#include <tuple>
 #include <type_traits>
 #include <utility>
 
@@ -25,6 +27,7 @@ static_assert(std::endian::native == std::endian::little, "split files are littl
 // whenever the layout changes, so that an old file is refused by name).
 constexpr char kIndexMagic[8] = {'T', 'E', 'T', 'I', 'S', 'O', 'I', 'X'};
 constexpr char kDomainMagic[8] = {'T', 'E', 'T', 'I', 'S', 'O', 'D', 'M'};
+constexpr char kEdgesMagic[8] = {'T', 'E', 'T', 'I', 'S', 'O', 'E', 'D'};
 constexpr std::uint32_t kVersion = 1;
 
 // A file's bytes built up in memory, then written whole with the digest of
@@ -135,6 +138,10 @@ bool valid_offsets(const std::vector<std::int64_t>& first, std::size_t rows, std
 
 std::filesystem::path split_index_file(const std::filesystem::path& dir) { return dir / "index.tetiso"; }
 
+std::filesystem::path split_edges_file(const std::filesystem::path& dir, int domain) {
+    return dir / ("edges-" + std::to_string(domain) + ".tetiso");
+}
+
 std::filesystem::path split_domain_file(const std::filesystem::path& dir, int domain) {
     return dir / ("domain-" + std::to_string(domain) + ".tetiso");
 }
@@ -149,42 +156,40 @@ void write_mesh_split(const MeshPartition& partition, double default_level, cons
         if (!std::filesystem::create_directory(temporary, ec) || ec)
             throw Error(dir.string() + ": cannot write: " + (ec ? ec.message() : std::string("cannot create ") + temporary.string()));
         const int domains = partition.domain_count();
-        std::vector<std::uint64_t> digests(static_cast<std::size_t>(domains));
+        std::vector<std::uint64_t> domain_digests(static_cast<std::size_t>(domains)), edge_digests(domain_digests);
         std::vector<std::string> names(static_cast<std::size_t>(domains));
-        std::vector<EdgeKey> shared_keys;
-        std::vector<std::int64_t> shared_first{0};
-        std::vector<std::int32_t> shared_domains;
-        {
-            // Every shared edge once, with its domains: gathered from the
-            // domains' lists, a key's holders are the domains that list it.
-            std::vector<std::pair<EdgeKey, std::int32_t>> held;
-            for (int d = 0; d < domains; ++d) {
-                const Domain domain = partition.make_domain(d);
-                for (const EdgeKey key : domain.shared_edges) held.emplace_back(key, d);
-                ByteWriter out;
-                out.put(kDomainMagic);
-                out.put(kVersion);
-                out.put(static_cast<std::int32_t>(d));
-                out.put_array(domain.x);
-                out.put_array(domain.y);
-                out.put_array(domain.z);
-                out.put_array(domain.f);
-                out.put_array(domain.gid);
-                out.put_array(domain.interface);
-                out.put_array(domain.shared_edges);
-                out.put_array(domain.tets);
-                digests[static_cast<std::size_t>(d)] = out.write(split_domain_file(temporary, d));
-                names[static_cast<std::size_t>(d)] = partition.domain_name(d);
+        for (int d = 0; d < domains; ++d) {
+            const Domain domain = partition.make_domain(d);
+            ByteWriter out;
+            out.put(kDomainMagic);
+            out.put(kVersion);
+            out.put(static_cast<std::int32_t>(d));
+            out.put_array(domain.x);
+            out.put_array(domain.y);
+            out.put_array(domain.z);
+            out.put_array(domain.f);
+            out.put_array(domain.gid);
+            out.put_array(domain.interface);
+            out.put_array(domain.shared_edges);
+            out.put_array(domain.tets);
+            domain_digests[static_cast<std::size_t>(d)] = out.write(split_domain_file(temporary, d));
+            // The domain's shared edges again, each with its holders: a seam
+            // reads these small files, never the tetrahedra.
+            std::vector<std::int64_t> first{0};
+            std::vector<std::int32_t> holders;
+            for (const EdgeKey key : domain.shared_edges) {
+                for (const int h : partition.domains_of_edge(edge_key_low(key), edge_key_high(key))) holders.push_back(h);
+                first.push_back(static_cast<std::int64_t>(holders.size()));
             }
-            std::sort(held.begin(), held.end());
-            for (std::size_t i = 0; i < held.size(); ++i) {
-                if (i == 0 || held[i].first != held[i - 1].first) {
-                    if (i > 0) shared_first.push_back(static_cast<std::int64_t>(shared_domains.size()));
-                    shared_keys.push_back(held[i].first);
-                }
-                shared_domains.push_back(held[i].second);
-            }
-            if (!held.empty()) shared_first.push_back(static_cast<std::int64_t>(shared_domains.size()));
+            ByteWriter edges;
+            edges.put(kEdgesMagic);
+            edges.put(kVersion);
+            edges.put(static_cast<std::int32_t>(d));
+            edges.put_array(domain.shared_edges);
+            edges.put_array(first);
+            edges.put_array(holders);
+            edge_digests[static_cast<std::size_t>(d)] = edges.write(split_edges_file(temporary, d));
+            names[static_cast<std::size_t>(d)] = partition.domain_name(d);
         }
         ByteWriter index;
         index.put(kIndexMagic);
@@ -204,11 +209,9 @@ void write_mesh_split(const MeshPartition& partition, double default_level, cons
         }
         index.put_array(neighbour_first);
         index.put_array(neighbour_list);
-        index.put_array(shared_keys);
-        index.put_array(shared_first);
-        index.put_array(shared_domains);
         for (const std::string& name : names) index.put_string(name);
-        index.put_array(digests);
+        index.put_array(domain_digests);
+        index.put_array(edge_digests);
         index.write(split_index_file(temporary));
         std::filesystem::rename(temporary, dir, ec);
         if (ec) throw Error(dir.string() + ": cannot write: " + ec.message());
@@ -259,31 +262,83 @@ SplitMeshPartition::SplitMeshPartition(std::filesystem::path dir) : dir_(std::mo
             if (n < 0 || n >= domains || n == static_cast<int>(d)) in.fail("domain " + std::to_string(d) + " has neighbour " + std::to_string(n));
         if (!std::is_sorted(neighbours_[d].begin(), neighbours_[d].end())) in.fail("domain " + std::to_string(d) + "'s neighbours are not sorted");
     }
-    shared_keys_ = in.get_array<EdgeKey>("the shared edges");
-    shared_first_ = in.get_array<std::int64_t>("the shared edges");
-    shared_domains_ = in.get_array<std::int32_t>("the shared edges");
-    if (!valid_offsets(shared_first_, shared_keys_.size(), shared_domains_.size()) ||
-        std::adjacent_find(shared_keys_.begin(), shared_keys_.end(), std::greater_equal<>()) != shared_keys_.end())
-        in.fail("the shared edges are malformed");
-    for (std::size_t e = 0; e < shared_keys_.size(); ++e) {
-        const auto first = shared_domains_.begin() + shared_first_[e], last = shared_domains_.begin() + shared_first_[e + 1];
-        if (last - first < 2 || !std::is_sorted(first, last) || *first < 0 || *(last - 1) >= domains)
-            in.fail("shared edge " + std::to_string(e) + " does not list two or more domains in range");
-    }
     names_.resize(d_count);
     for (std::string& name : names_) name = in.get_string("the domain names");
     domain_digests_ = in.get_array<std::uint64_t>("the domain digests");
-    if (domain_digests_.size() != d_count) in.fail("digests for " + std::to_string(domain_digests_.size()) + " domains, where it has " + std::to_string(domains));
+    edge_digests_ = in.get_array<std::uint64_t>("the edge digests");
+    if (domain_digests_.size() != d_count || edge_digests_.size() != d_count)
+        in.fail("digests for " + std::to_string(domain_digests_.size()) + " and " + std::to_string(edge_digests_.size()) +
+                " domains, where it has " + std::to_string(domains));
     in.finish();
 }
 
+namespace {
+
+// Shared edges with their domains, sorted by key, each once.
+struct EdgeTable {
+    std::vector<EdgeKey> keys;
+    std::vector<std::int64_t> first;
+    std::vector<std::int32_t> holders;
+
+    std::vector<int> find(GlobalId a, GlobalId b) const {
+        if (a < 0 || b < 0 || a > kMaxGlobalId || b > kMaxGlobalId) return {};
+        const EdgeKey key = edge_key(a, b);
+        const auto found = std::lower_bound(keys.begin(), keys.end(), key);
+        if (found == keys.end() || *found != key) return {};
+        const auto e = static_cast<std::size_t>(found - keys.begin());
+        return {holders.begin() + first[e], holders.begin() + first[e + 1]};
+    }
+};
+
+} // namespace
+
+EdgeDomains SplitMeshPartition::edge_domains(int first, int count) const {
+    if (first < 0 || count < 1 || first > domain_count() - count)
+        throw Error("no domains " + std::to_string(first) + " to " + std::to_string(first + count - 1) + " in the split " +
+                    dir_.string() + " of " + std::to_string(domain_count()));
+    // (key, holders) of every domain in the range; an edge two of them share
+    // comes twice, with the same holders.
+    std::vector<std::tuple<EdgeKey, int, std::int64_t, std::int64_t>> rows; // key, domain, holder range
+    std::vector<std::vector<std::int32_t>> holders_of(static_cast<std::size_t>(count));
+    for (int d = first; d < first + count; ++d) {
+        ByteReader in(split_edges_file(dir_, d), kEdgesMagic, "split edges");
+        if (in.digest() != edge_digests_[static_cast<std::size_t>(d)])
+            in.fail("not the file that " + split_index_file(dir_).string() + " lists for domain " + std::to_string(d) +
+                    " (from another split?)");
+        if (const auto id = in.get<std::int32_t>(); id != d) in.fail("holds the edges of domain " + std::to_string(id));
+        const auto keys = in.get_array<EdgeKey>("the shared edges");
+        const auto row_first = in.get_array<std::int64_t>("the shared edges");
+        auto holders = in.get_array<std::int32_t>("the shared edges");
+        in.finish();
+        if (!valid_offsets(row_first, keys.size(), holders.size()) ||
+            std::adjacent_find(keys.begin(), keys.end(), std::greater_equal<>()) != keys.end())
+            in.fail("its shared edges are malformed");
+        for (std::size_t e = 0; e < keys.size(); ++e) {
+            const auto begin = holders.begin() + row_first[e], end = holders.begin() + row_first[e + 1];
+            if (end - begin < 2 || !std::is_sorted(begin, end) || *begin < 0 || *(end - 1) >= domain_count() ||
+                !std::binary_search(begin, end, d))
+                in.fail("shared edge " + std::to_string(e) + " does not list two or more domains in range, this one among them");
+            rows.emplace_back(keys[e], d - first, row_first[e], row_first[e + 1]);
+        }
+        holders_of[static_cast<std::size_t>(d - first)] = std::move(holders);
+    }
+    std::sort(rows.begin(), rows.end());
+    auto table = std::make_shared<EdgeTable>();
+    table->first.push_back(0);
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+        const auto& [key, slot, begin, end] = rows[i];
+        if (i > 0 && std::get<0>(rows[i - 1]) == key) continue;
+        const auto& list = holders_of[static_cast<std::size_t>(slot)];
+        table->keys.push_back(key);
+        table->holders.insert(table->holders.end(), list.begin() + begin, list.begin() + end);
+        table->first.push_back(static_cast<std::int64_t>(table->holders.size()));
+    }
+    return [table](GlobalId a, GlobalId b) { return table->find(a, b); };
+}
+
 std::vector<int> SplitMeshPartition::domains_of_edge(GlobalId a, GlobalId b) const {
-    if (a < 0 || b < 0 || a > kMaxGlobalId || b > kMaxGlobalId) return {};
-    const EdgeKey key = edge_key(a, b);
-    const auto found = std::lower_bound(shared_keys_.begin(), shared_keys_.end(), key);
-    if (found == shared_keys_.end() || *found != key) return {};
-    const auto e = static_cast<std::size_t>(found - shared_keys_.begin());
-    return {shared_domains_.begin() + shared_first_[e], shared_domains_.begin() + shared_first_[e + 1]};
+    std::call_once(all_edges_once_, [this] { all_edges_ = edge_domains(0, domain_count()); });
+    return all_edges_(a, b);
 }
 
 std::string SplitMeshPartition::domain_name(int domain) const { return names_.at(static_cast<std::size_t>(domain)); }

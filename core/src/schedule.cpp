@@ -155,7 +155,7 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
     seam_options.sample_rings = config_.sample_rings;
     SeamReport seam_report;
     Piece piece = seam(*left, *right,
-                       [this](GlobalId a, GlobalId b) { return partition_->domains_of_edge(a, b); },
+                       partition_->edge_domains(n.first, n.count),
                        seam_options, &seam_report);
     record.stages.merge = seam_report.seconds.merge;
     record.stages.region = seam_report.seconds.region;

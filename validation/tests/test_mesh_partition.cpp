@@ -284,10 +284,17 @@ TEST_P(MeshPartitionCase, SplitIntoFilesIsTheSamePartitionAndJob) {
         EXPECT_EQ(a.interface, b.interface);
         EXPECT_EQ(a.shared_edges, b.shared_edges);
         EXPECT_EQ(a.tets, b.tets);
+        // What a seam of this domain alone, of it and the next, and of every
+        // domain reads: each the whole mesh's holders.
+        const EdgeDomains own = split.edge_domains(d, 1);
+        const EdgeDomains pair = split.edge_domains(std::min(d, split.domain_count() - 2), 2);
         for (const EdgeKey key : a.shared_edges) {
-            const auto holders = split.domains_of_edge(edge_key_low(key), edge_key_high(key));
+            const GlobalId low = edge_key_low(key), high = edge_key_high(key);
+            const auto holders = partition.domains_of_edge(low, high);
             ASSERT_GE(holders.size(), 2u);
-            ASSERT_EQ(holders, partition.domains_of_edge(edge_key_low(key), edge_key_high(key)));
+            ASSERT_EQ(own(low, high), holders);
+            ASSERT_EQ(pair(low, high), holders);
+            ASSERT_EQ(split.domains_of_edge(low, high), holders);
         }
         shared += a.shared_edges.size();
     }
@@ -426,6 +433,23 @@ TEST(MeshSplit, DamagedOrMismatchedFilesAreClearErrors) {
     EXPECT_NE(message([&] { split.make_domain(1); }).find(domain1.string() + ": cannot open"), std::string::npos);
     write_bytes(domain1, domain1_bytes);
     EXPECT_NO_THROW(split.make_domain(1));
+
+    // A seam's edge file damaged: the seam, and the job, name it.
+    const std::filesystem::path edges1 = split_edges_file(dir, 1);
+    const std::string edges1_bytes = test::read_bytes(edges1);
+    std::string damaged_edges = edges1_bytes;
+    damaged_edges[damaged_edges.size() / 2] = static_cast<char>(damaged_edges[damaged_edges.size() / 2] ^ 0x01);
+    write_bytes(edges1, damaged_edges);
+    EXPECT_NE(message([&] { split.edge_domains(1, 1); }).find(edges1.string() + ": damaged"), std::string::npos);
+    EXPECT_NE(message([&] { split.edge_domains(0, 8); }).find(edges1.string() + ": damaged"), std::string::npos);
+    EXPECT_NO_THROW(split.edge_domains(2, 6));
+    JobConfig damaged_job;
+    damaged_job.split = dir;
+    damaged_job.domains = 0;
+    EXPECT_NE(message([&] { run_local(Job(damaged_job), {}); }).find(edges1.string() + ": damaged"), std::string::npos);
+    std::filesystem::copy_file(split_edges_file(dir, 2), edges1, std::filesystem::copy_options::overwrite_existing);
+    EXPECT_NE(message([&] { split.edge_domains(1, 1); }).find("not the file that"), std::string::npos);
+    write_bytes(edges1, edges1_bytes);
 
     // The index truncated, or of another format version (its digest made to
     // fit, so that the version check itself is what answers).

@@ -6,18 +6,22 @@
 // rank, which bounds a job by one node's memory. `write_mesh_split` turns a
 // MeshPartition into a directory that a job reads piecewise instead:
 //
-//   DIR/index.tetiso     what rank 0 and every worker need before any task:
-//                        counts, spacing, the fingerprint, the merge tree,
-//                        the neighbours, every shared edge with its domains,
-//                        each domain's name and each domain file's digest;
+//   DIR/index.tetiso     what every rank needs before any task, a few
+//                        numbers per domain: counts, spacing, the
+//                        fingerprint, the merge tree, the neighbours, each
+//                        domain's name and its two files' digests;
 //   DIR/domain-K.tetiso  domain K as MeshPartition::make_domain gives it:
 //                        nodes, field values, global ids, interface marks,
-//                        shared edges and tetrahedra.
+//                        shared edges and tetrahedra;
+//   DIR/edges-K.tetiso   the edges domain K shares, each with the domains
+//                        that hold it, which a seam of K's piece needs.
 //
-// SplitMeshPartition reads the index when built and a domain file only when
-// its domain is made, so a worker's memory is the index plus one domain. The
-// job over a split is the job over the MeshPartition it was written from, bit
-// for bit: the domains, tree, spacing and fingerprint are the same.
+// SplitMeshPartition reads the index when built, a domain file when its
+// domain is made, and a seam's edge files when the seam asks (edge_domains),
+// so no rank holds a table of the whole mesh's interfaces either: a worker's
+// memory is the index plus one domain's task. The job over a split is the job
+// over the MeshPartition it was written from, bit for bit: the domains, tree,
+// spacing, fingerprint and shared edges are the same.
 //
 // The files are binary, little-endian, each a header (a magic string naming
 // the kind of file and a format version), counts, flat arrays, and a 64-bit
@@ -29,6 +33,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -59,8 +64,12 @@ public:
     const std::vector<DomainTreeNode>& tree() const override { return tree_; }
     // For an edge that two or more domains share, as MeshPartition answers;
     // for any other, empty: the split keeps no mesh to look it up in, and a
-    // job asks only about locked vertices, which lie on shared edges.
+    // job asks only about locked vertices, which lie on shared edges. The
+    // first call reads every edge file; a job calls edge_domains instead.
     std::vector<int> domains_of_edge(GlobalId a, GlobalId b) const override;
+    // Reads the edge files of domains [first, first + count) (throws
+    // tetiso::Error naming one that is missing or damaged).
+    EdgeDomains edge_domains(int first, int count) const override;
     // Reads DIR/domain-K.tetiso; throws tetiso::Error naming it.
     Domain make_domain(int domain) const override;
     bool pieces_are_manifold() const override { return false; }
@@ -81,15 +90,17 @@ private:
     std::uint64_t fingerprint_ = 0;
     std::vector<DomainTreeNode> tree_;
     std::vector<std::vector<int>> neighbours_;
-    std::vector<EdgeKey> shared_keys_;
-    std::vector<std::int64_t> shared_first_;
-    std::vector<std::int32_t> shared_domains_;
     std::vector<std::string> names_;
-    std::vector<std::uint64_t> domain_digests_;
+    std::vector<std::uint64_t> domain_digests_, edge_digests_;
+    // Every domain's shared edges, for domains_of_edge, read on first use.
+    mutable std::once_flag all_edges_once_;
+    mutable EdgeDomains all_edges_;
 };
 
 // The file of domain `domain` in a split directory.
 std::filesystem::path split_domain_file(const std::filesystem::path& dir, int domain);
+// The file of domain `domain`'s shared edges in a split directory.
+std::filesystem::path split_edges_file(const std::filesystem::path& dir, int domain);
 // The index file of a split directory.
 std::filesystem::path split_index_file(const std::filesystem::path& dir);
 

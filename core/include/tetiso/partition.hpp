@@ -6,12 +6,17 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "tetiso/mesh.hpp"
 
 namespace tetiso {
+
+// The domains of the whole mesh that contain the mesh edge between two nodes
+// (global ids), sorted.
+using EdgeDomains = std::function<std::vector<int>(GlobalId, GlobalId)>;
 
 // One node of a partition's merge tree. It covers domains [first, first +
 // count); a leaf (count 1) is one domain, an inner node joins its two
@@ -55,6 +60,16 @@ public:
     virtual const std::vector<DomainTreeNode>& tree() const = 0;
     // Domains that hold the mesh edge between two nodes (global ids), sorted.
     virtual std::vector<int> domains_of_edge(GlobalId a, GlobalId b) const = 0;
+    // domains_of_edge for every edge that a domain in [first, first + count)
+    // holds: all that a seam of those domains asks about (it asks for its
+    // locked vertices, whose edges its domains share with others). A
+    // partition that keeps no table of the whole mesh's shared edges (a
+    // split mesh) loads only that range's; the answer may keep data alive.
+    virtual EdgeDomains edge_domains(int first, int count) const {
+        (void)first;
+        (void)count;
+        return [this](GlobalId a, GlobalId b) { return domains_of_edge(a, b); };
+    }
     // Builds the nodes, field values, interfaces and tetrahedra of one domain.
     virtual Domain make_domain(int domain) const = 0;
     // Whether every domain's isosurface piece is a 2-manifold (with border),

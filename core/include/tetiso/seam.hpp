@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "tetiso/mesh.hpp"
+#include "tetiso/partition.hpp"
 #include "tetiso/reduce.hpp"
 
 namespace tetiso {
@@ -20,9 +21,6 @@ Piece merge_by_key(const Piece& a, const Piece& b);
 // Merges any number of pieces, pairwise in a balanced tree; the result does
 // not depend on the order of `pieces`.
 Piece merge_all(std::vector<Piece> pieces);
-
-// The domains of the whole mesh that contain the mesh edge between two nodes.
-using EdgeDomains = std::function<std::vector<int>(GlobalId, GlobalId)>;
 
 // Clears kLocked on every vertex whose edge lies in no domain outside
 // `piece.domains`: its neighbourhood is complete, so reduction may touch it.
