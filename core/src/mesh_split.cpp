@@ -252,6 +252,13 @@ SplitMeshPartition::SplitMeshPartition(std::filesystem::path dir) : dir_(std::mo
         if (!ok) in.fail("merge tree node " + std::to_string(i) + " is malformed");
     }
     if (tree_.front().first != 0 || tree_.front().count != domains) in.fail("the merge tree's root does not cover every domain");
+    // Every node but the root the child of exactly one: a tree, not a graph
+    // that reaches a subtree twice.
+    std::vector<int> parents(tree_.size(), 0);
+    for (const DomainTreeNode& n : tree_)
+        if (n.left >= 0) ++parents[static_cast<std::size_t>(n.left)], ++parents[static_cast<std::size_t>(n.right)];
+    for (std::size_t i = 1; i < tree_.size(); ++i)
+        if (parents[i] != 1) in.fail("merge tree node " + std::to_string(i) + " has " + std::to_string(parents[i]) + " parents");
     const auto neighbour_first = in.get_array<std::int64_t>("the neighbours");
     const auto neighbour_list = in.get_array<std::int32_t>("the neighbours");
     if (!valid_offsets(neighbour_first, d_count, neighbour_list.size())) in.fail("the neighbour lists are malformed");

@@ -1,5 +1,6 @@
 // Files damaged at random: every reader either returns something the next
-// stage can take or throws tetiso::Error. A valid file is cut short, has bytes
+// stage can take or throws tetiso::Error. The readers here: PLY, VTP, TetGen
+// meshes, and split meshes (index, domain and edge files). A valid file is cut short, has bytes
 // overwritten, inserted or dropped, or has one of its numbers replaced by a
 // value chosen to break arithmetic on counts and sizes (0, -1, 2^31, 2^32 - 1,
 // 10^20, 1e308, nan). What reads is then checked and, where it is a manifold,
@@ -13,6 +14,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -26,7 +28,10 @@
 #include "tetiso/extract.hpp"
 #include "tetiso/io.hpp"
 #include "tetiso/lattice.hpp"
+#include "tetiso/mesh_partition.hpp"
+#include "tetiso/mesh_split.hpp"
 #include "tetiso/reduce.hpp"
+#include "tetiso/schedule.hpp"
 #include "tetiso/tetgen.hpp"
 
 namespace tetiso {
@@ -102,15 +107,20 @@ protected:
     // Runs `read` on `cases` damaged copies of the files in `originals`
     // (one of them damaged per case, written under the same names) and
     // counts how each case ended.
+    // seal, if given, makes a damaged file whole again in the format's own
+    // terms (a digest recomputed), so that the checks behind it are reached.
     void run(const std::string& format, const std::vector<std::pair<std::string, std::string>>& originals,
-             const std::function<std::size_t(const std::string&)>& text_end, const std::function<void()>& read) {
+             const std::function<std::size_t(const std::string&)>& text_end, const std::function<void()>& read,
+             const std::function<std::string(std::string, std::mt19937_64&)>& seal = {}) {
         std::mt19937_64 rng(0x7e7150);
         int refused = 0, accepted = 0;
         for (int c = 0; c < case_count(); ++c) {
             const std::size_t target = static_cast<std::size_t>(rng() % originals.size());
             for (std::size_t i = 0; i < originals.size(); ++i) {
                 const auto& [name, bytes] = originals[i];
-                spill(at(name), i == target ? damage(bytes, text_end(bytes), rng) : bytes);
+                std::string damaged = i == target ? damage(bytes, text_end(bytes), rng) : bytes;
+                if (i == target && seal) damaged = seal(std::move(damaged), rng);
+                spill(at(name), damaged);
             }
             try {
                 read();
@@ -216,6 +226,42 @@ TEST_F(DamagedInputs, TetgenMeshesAreReadOrRefused) {
         source.attribute = 0;
         check_and_reduce(extract(read_tetgen(source), static_cast<float>(field->default_level())));
     });
+}
+
+// A split mesh: one of its files damaged, and, in half the cases, its digest
+// made to fit again, as a writer with a bug would leave it, so that the
+// counts, ranges and the merge tree are what must refuse it. What reads is
+// then run as a job, unreduced, which every domain and seam goes through.
+TEST_F(DamagedInputs, SplitMeshesAreReadOrRefused) {
+    const Lattice lattice(6);
+    const Decomposition one(lattice, 1);
+    const auto field = make_field("sphere");
+    Domain mesh = one.make_domain(0, *field);
+    std::vector<std::int32_t> part(mesh.tet_count());
+    for (std::size_t t = 0; t < part.size(); ++t) part[t] = static_cast<std::int32_t>(t * 3 / part.size());
+    const MeshPartition partition(std::move(mesh), part, "thirds");
+    const fs::path made = at("made");
+    write_mesh_split(partition, field->default_level(), made);
+    std::vector<std::pair<std::string, std::string>> originals;
+    for (const auto& entry : fs::directory_iterator(made))
+        originals.emplace_back("split/" + entry.path().filename().string(), test::read_bytes(entry.path()));
+    std::sort(originals.begin(), originals.end());
+    ASSERT_EQ(originals.size(), 7u); // the index, three domain files, three edge files
+    fs::create_directories(at("split"));
+    const auto seal = [](std::string bytes, std::mt19937_64& rng) {
+        if (rng() % 2 == 0 || bytes.size() < 8) return bytes;
+        const std::uint64_t digest = Digest().add(bytes.data(), bytes.size() - 8).value();
+        std::memcpy(bytes.data() + bytes.size() - 8, &digest, 8);
+        return bytes;
+    };
+    run("split mesh", originals, [](const std::string&) { return std::size_t{0}; }, [&] {
+        JobConfig config;
+        config.split = at("split");
+        config.domains = 0;
+        config.reduce = false;
+        const Piece surface = run_local(Job(config), {}).surface;
+        check_topology(surface);
+    }, seal);
 }
 
 } // namespace
