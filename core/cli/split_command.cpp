@@ -22,10 +22,7 @@ struct SplitArguments {
 };
 
 void run_split(const SplitArguments& args) {
-    std::error_code ec;
-    if (std::filesystem::exists(args.output, ec) &&
-        (!std::filesystem::is_directory(args.output, ec) || !std::filesystem::is_empty(args.output, ec)))
-        throw Error(args.output.string() + ": exists and is not an empty directory; a split is written only to a new one");
+    require_new_split_directory(args.output); // before the mesh is read and partitioned
     const std::unique_ptr<Field> field = make_field(args.field);
     const auto partition = partition_mesh(TetgenSource{args.mesh, args.attribute, field.get()}, args.partition, args.domains);
     const double level = args.attribute ? 0.0 : field->default_level();

@@ -146,11 +146,16 @@ std::filesystem::path split_domain_file(const std::filesystem::path& dir, int do
     return dir / ("domain-" + std::to_string(domain) + ".tetiso");
 }
 
-void write_mesh_split(const MeshPartition& partition, double default_level, const std::filesystem::path& dir) {
+void require_new_split_directory(const std::filesystem::path& dir) {
     std::error_code ec;
     if (std::filesystem::exists(dir, ec) &&
         (!std::filesystem::is_directory(dir, ec) || !std::filesystem::is_empty(dir, ec)))
         throw Error(dir.string() + ": exists and is not an empty directory; a split is written only to a new one");
+}
+
+void write_mesh_split(const MeshPartition& partition, double default_level, const std::filesystem::path& dir) {
+    require_new_split_directory(dir);
+    std::error_code ec;
     const std::filesystem::path temporary = detail::temporary_sibling(dir);
     try {
         if (!std::filesystem::create_directory(temporary, ec) || ec)

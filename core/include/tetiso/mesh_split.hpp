@@ -51,6 +51,10 @@ namespace tetiso {
 // nothing is left at `dir`.
 void write_mesh_split(const MeshPartition& partition, double default_level, const std::filesystem::path& dir);
 
+// Throws tetiso::Error unless `dir` is absent or an empty directory: what
+// write_mesh_split requires, to be asked before the work that precedes it.
+void require_new_split_directory(const std::filesystem::path& dir);
+
 class SplitMeshPartition final : public Partition {
 public:
     // Reads DIR/index.tetiso; throws tetiso::Error naming the file for
