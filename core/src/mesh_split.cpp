@@ -378,6 +378,11 @@ Domain SplitMeshPartition::make_domain(int domain) const {
     const std::size_t n = out.gid.size();
     if (out.x.size() != n || out.y.size() != n || out.z.size() != n || out.f.size() != n || out.interface.size() != n)
         in.fail("its node arrays differ in length");
+    for (const auto* values : {&out.x, &out.y, &out.z, &out.f})
+        for (std::size_t v = 0; v < n; ++v)
+            if (!std::isfinite((*values)[v]))
+                in.fail(std::string(values == &out.f ? "the field value" : "a coordinate") + " of node " +
+                        std::to_string(v) + " is not a finite number");
     if (out.tets.size() % 4 != 0) in.fail("its tetrahedra are not four corners each");
     for (const std::int32_t v : out.tets)
         if (v < 0 || static_cast<std::size_t>(v) >= n) in.fail("a tetrahedron refers to node " + std::to_string(v) + " of " + std::to_string(n));
