@@ -457,7 +457,7 @@ TEST(MeshSplit, DamagedOrMismatchedFilesAreClearErrors) {
     EXPECT_NE(message([&] { SplitMeshPartition{dir}; }).find(index.string() + ": damaged"), std::string::npos);
     std::string other_version = index_bytes.substr(0, index_bytes.size() - 8);
     other_version[8] = 2;
-    const std::uint64_t digest = Digest().add(other_version.data(), other_version.size()).value();
+    const std::uint64_t digest = split_digest(other_version.data(), other_version.size());
     other_version.append(reinterpret_cast<const char*>(&digest), sizeof(digest));
     write_bytes(index, other_version);
     EXPECT_NE(message([&] { SplitMeshPartition{dir}; }).find("format version 2"), std::string::npos);

@@ -25,12 +25,15 @@
 //
 // The files are binary, little-endian, each a header (a magic string naming
 // the kind of file and a format version), counts, flat arrays, and a 64-bit
-// FNV-1a digest of everything before it. A reader checks every count against
-// the file's size before allocating, every index against its range, and the
-// digest, and names the file in any error; a domain file must also carry the
-// digest the index lists for it, so files of two different splits never mix.
+// digest of everything before it (split_digest: xxHash's XXH3, 0.006 s per
+// 128 MB on the 2-core VM, where a byte-wise FNV-1a takes 0.16 s). A reader
+// checks every count against the file's size before allocating, every index
+// against its range, and the digest, and names the file in any error; a
+// domain or edge file must also carry the digest the index lists for it, so
+// files of two different splits never mix.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <mutex>
@@ -103,6 +106,9 @@ private:
 
 // The file of domain `domain` in a split directory.
 std::filesystem::path split_domain_file(const std::filesystem::path& dir, int domain);
+// The digest a split file ends with, of the bytes before it.
+std::uint64_t split_digest(const void* data, std::size_t size);
+
 // The file of domain `domain`'s shared edges in a split directory.
 std::filesystem::path split_edges_file(const std::filesystem::path& dir, int domain);
 // The index file of a split directory.
