@@ -9,7 +9,7 @@
 #   scripts/bench_speedup.sh out 540 "--lattice 500 --points 125:15 --bind core --out out/t-core"
 #
 # TETISO_COMMIT is recorded as the commit where the tree has no .git.
-# TETISO_PREFIX names a prefix holding CLI11 and nlohmann-json where the
+# TETISO_PREFIX names a prefix holding CLI11, nlohmann-json and xxhash.h where the
 # system has none (e.g. headers carried to a machine without a registry).
 # Writes OUTDIR/machine.txt and OUTDIR/build.log; the sweeps write where their
 # --out says.
