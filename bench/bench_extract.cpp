@@ -8,6 +8,10 @@
 //   extract/tetiso/N:<N>/threads:<T> tetiso, every hardware thread
 //   extract/vtk/N:<N>/threads:1      VTK, Sequential backend + SequentialProcessing
 //   extract/vtk/N:<N>/threads:<T>    VTK, its default backend (for context)
+//   extract/gpu/N:<N>/threads:1      tetiso on the GPU (where there is one):
+//                                    the whole call, the domain uploaded and
+//                                    the piece downloaded each time; counters
+//                                    give the three stages' mean seconds
 // Only the extraction is timed: building the domain and converting it to a
 // vtkUnstructuredGrid happen once per N, outside the timed loops. All cases
 // check their vertex and triangle counts against each other in the report.
@@ -25,6 +29,7 @@
 
 #include "bench_main.hpp"
 #include "tetiso/extract.hpp"
+#include "tetiso/extract_gpu.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/mesh.hpp"
@@ -89,6 +94,27 @@ void bench_tetiso(benchmark::State& state, std::int64_t n, int threads) {
     set_size_counters(state, p.domain, vertices, triangles);
 }
 
+void bench_gpu(benchmark::State& state, std::int64_t n) {
+    const Problem& p = problem(n);
+    static tetiso::GpuExtractor gpu; // its buffers outlive one case, as in a worker
+    std::int64_t vertices = 0, triangles = 0;
+    tetiso::GpuExtractTimings sum;
+    for (auto _ : state) {
+        const tetiso::Piece piece = gpu.extract(p.domain, kLevel);
+        vertices = static_cast<std::int64_t>(piece.vertex_count());
+        triangles = static_cast<std::int64_t>(piece.triangle_count());
+        benchmark::DoNotOptimize(piece.triangles.data());
+        sum.upload += gpu.last_timings().upload;
+        sum.compute += gpu.last_timings().compute;
+        sum.download += gpu.last_timings().download;
+    }
+    set_size_counters(state, p.domain, vertices, triangles);
+    const auto iterations = static_cast<double>(state.iterations());
+    state.counters["upload_s"] = sum.upload / iterations;
+    state.counters["compute_s"] = sum.compute / iterations;
+    state.counters["download_s"] = sum.download / iterations;
+}
+
 #ifdef TETISO_HAVE_VTK
 void bench_vtk(benchmark::State& state, std::int64_t n, int threads) {
     Problem& p = problem(n);
@@ -112,6 +138,8 @@ int main(int argc, char** argv) {
     benchmark::AddCustomContext("field", "paper");
     benchmark::AddCustomContext("level", std::to_string(kLevel));
     benchmark::AddCustomContext("domains", "1");
+    const tetiso::GpuInfo gpu = tetiso::gpu_info();
+    benchmark::AddCustomContext("gpu", gpu.description);
 #ifdef TETISO_HAVE_VTK
     benchmark::AddCustomContext("vtk_version", tetiso::reference::vtk_version());
     benchmark::AddCustomContext("vtk_default_backend", tetiso::reference::vtk_default_backend());
@@ -126,6 +154,7 @@ int main(int argc, char** argv) {
         for (const int threads : thread_counts())
             register_timed(case_name("extract/vtk", n, threads), bench_vtk, n, threads);
 #endif
+        if (gpu.available) register_timed(case_name("extract/gpu", n, 1), bench_gpu, n);
     }
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();

@@ -9,6 +9,7 @@
 #include "commands.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
+#include "tetiso/extract_gpu.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/io.hpp"
 #include "tetiso/lattice.hpp"
@@ -27,11 +28,49 @@ struct ExtractArguments {
     std::string field = "paper";
     std::optional<double> level;
     int threads = 1;
+    std::string device = "cpu"; // where the marching tetrahedra run: cpu or gpu
     bool reduce = false;
     ReduceOptions reduce_options;
     double max_error_spacings = 0.25;
     std::filesystem::path output;
     std::filesystem::path report;
+};
+
+// Extracts on the CPU or, with --device gpu, on one GPU kept for every
+// domain; counts the GPU's seconds by stage for the report.
+class Extractor {
+public:
+    explicit Extractor(const ExtractArguments& args) : threads_(args.threads) {
+        if (args.device == "gpu") {
+            const GpuInfo info = gpu_info();
+            if (!info.available) throw Error("--device gpu: " + info.description);
+            gpu_ = std::make_unique<GpuExtractor>();
+            description_ = info.description;
+        }
+    }
+
+    Piece operator()(const Domain& domain, float level) {
+        if (!gpu_) return extract(domain, level, ExtractOptions{threads_});
+        Piece piece = gpu_->extract(domain, level);
+        const GpuExtractTimings& t = gpu_->last_timings();
+        upload_ += t.upload;
+        compute_ += t.compute;
+        download_ += t.download;
+        return piece;
+    }
+
+    nlohmann::json json() const {
+        if (!gpu_) return {{"kind", "cpu"}};
+        return {{"kind", "gpu"},
+                {"name", description_},
+                {"seconds", {{"upload", upload_}, {"compute", compute_}, {"download", download_}}}};
+    }
+
+private:
+    int threads_;
+    std::unique_ptr<GpuExtractor> gpu_;
+    std::string description_;
+    double upload_ = 0.0, compute_ = 0.0, download_ = 0.0;
 };
 
 void report_empty(double level, float lowest, float highest) {
@@ -41,12 +80,13 @@ void report_empty(double level, float lowest, float highest) {
 }
 
 void run_extract_mesh(const ExtractArguments& args, const Field& field, double start) {
+    Extractor extractor(args);
     const double t0 = now_seconds();
     const Domain domain = read_tetgen(TetgenSource{args.mesh, args.attribute, &field});
     const double t1 = now_seconds();
     // An attribute has no level of its own; an analytic field does.
     const double level = args.level.value_or(args.attribute ? 0.0 : field.default_level());
-    Piece surface = extract(domain, static_cast<float>(level), ExtractOptions{args.threads});
+    Piece surface = extractor(domain, static_cast<float>(level));
     const double t2 = now_seconds();
     const auto [lo, hi] = std::minmax_element(domain.f.begin(), domain.f.end());
     if (surface.triangle_count() == 0 && lo != domain.f.end()) report_empty(level, *lo, *hi);
@@ -71,6 +111,7 @@ void run_extract_mesh(const ExtractArguments& args, const Field& field, double s
         {"tets", domain.tet_count()},
         {"mean_edge_length", spacing},
         {"threads", args.threads},
+        {"device", extractor.json()},
         {"vertices", surface.vertex_count()},
         {"triangles", surface.triangle_count()},
         {"output", args.output.string()},
@@ -105,6 +146,7 @@ void run_extract(const ExtractArguments& args) {
     const Lattice lattice(args.lattice);
     const Decomposition decomposition(lattice, args.domains);
     const double level = args.level.value_or(field->default_level());
+    Extractor extractor(args);
 
     double generate_seconds = 0, extract_seconds = 0;
     float lowest = std::numeric_limits<float>::infinity(), highest = -lowest;
@@ -114,7 +156,7 @@ void run_extract(const ExtractArguments& args) {
         const double t0 = now_seconds();
         const Domain domain = decomposition.make_domain(d, *field);
         const double t1 = now_seconds();
-        pieces.push_back(extract(domain, static_cast<float>(level), ExtractOptions{args.threads}));
+        pieces.push_back(extractor(domain, static_cast<float>(level)));
         extract_seconds += now_seconds() - t1;
         generate_seconds += t1 - t0;
         const auto [lo, hi] = std::minmax_element(domain.f.begin(), domain.f.end());
@@ -149,6 +191,7 @@ void run_extract(const ExtractArguments& args) {
             {"nodes", lattice.node_count()},
             {"tets", lattice.tet_count()},
             {"threads", args.threads},
+            {"device", extractor.json()},
             {"vertices", surface.vertex_count()},
             {"triangles", surface.triangle_count()},
             {"output", args.output.string()},
@@ -192,6 +235,10 @@ void add_extract_command(CLI::App& app, Command& run) {
         "Isosurface level (default: the field's own, 0.5 for paper)");
     cmd->add_option("--threads", args->threads, "Threads inside a domain (0 = all cores); output does not depend on it")
         ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    cmd->add_option("--device", args->device,
+                    "Where the marching tetrahedra run: cpu, or gpu (CUDA; the same surface, bit for bit)")
+        ->check(CLI::IsMember({"cpu", "gpu"}))
         ->capture_default_str();
     cmd->add_flag("--reduce", args->reduce, "Reduce the combined surface (parallel edge collapse and flip)");
     add_phi_option(*cmd, args->reduce_options.phi);

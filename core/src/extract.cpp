@@ -27,6 +27,7 @@
 #include <cmath>
 #include <string>
 
+#include "extract_rules.hpp"
 #include "tetiso/error.hpp"
 
 #ifdef _OPENMP
@@ -36,65 +37,14 @@
 namespace tetiso {
 namespace {
 
-constexpr int kEdgesOfTet[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-constexpr int kBucket = 8;
+using extract_rules::domain_name;
+using extract_rules::kBucket;
+using extract_rules::kCases;
+using extract_rules::kEdgesOfTet;
+using extract_rules::MarchCase;
+
 constexpr std::int32_t kEmpty = -1;
 constexpr std::size_t kTetChunk = 1 << 15;
-
-// For each of the 16 above/below patterns of a tetrahedron: its crossing
-// edges (tet-edge numbers), in the order that makes the triangle, or the quad's
-// cycle, counter-clockwise seen from the side of increasing field for a
-// positively oriented tetrahedron.
-struct MarchCase {
-    int crossings = 0; // 0, 3 (one triangle) or 4 (a quad, two triangles)
-    std::array<int, 4> edge{};
-};
-
-std::array<MarchCase, 16> build_cases() {
-    // Reference tetrahedron with positive orientation; above nodes get +1,
-    // below -1, so crossings are edge midpoints and the above side is where
-    // the above nodes' centroid is.
-    constexpr double corner[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    std::array<MarchCase, 16> cases{};
-    for (int pattern = 1; pattern < 15; ++pattern) {
-        auto above = [&](int v) { return (pattern >> v) & 1; };
-        std::array<int, 4> cut{};
-        int count = 0;
-        for (int e = 0; e < 6; ++e)
-            if (above(kEdgesOfTet[e][0]) != above(kEdgesOfTet[e][1])) cut[count++] = e;
-        if (count == 4) {
-            // Order the quad as a cycle: consecutive edges share a tet node.
-            auto share = [](int e, int f) {
-                return kEdgesOfTet[e][0] == kEdgesOfTet[f][0] || kEdgesOfTet[e][0] == kEdgesOfTet[f][1] ||
-                       kEdgesOfTet[e][1] == kEdgesOfTet[f][0] || kEdgesOfTet[e][1] == kEdgesOfTet[f][1];
-            };
-            if (!share(cut[0], cut[1])) std::swap(cut[1], cut[2]);
-            if (!share(cut[1], cut[2])) std::swap(cut[2], cut[3]);
-        }
-        auto midpoint = [&](int e, int axis) {
-            return 0.5 * (corner[kEdgesOfTet[e][0]][axis] + corner[kEdgesOfTet[e][1]][axis]);
-        };
-        double a[3], b[3], normal[3], up[3] = {0, 0, 0};
-        for (int axis = 0; axis < 3; ++axis) {
-            a[axis] = midpoint(cut[1], axis) - midpoint(cut[0], axis);
-            b[axis] = midpoint(cut[2], axis) - midpoint(cut[0], axis);
-        }
-        normal[0] = a[1] * b[2] - a[2] * b[1];
-        normal[1] = a[2] * b[0] - a[0] * b[2];
-        normal[2] = a[0] * b[1] - a[1] * b[0];
-        for (int v = 0; v < 4; ++v)
-            for (int axis = 0; axis < 3; ++axis) up[axis] += (above(v) ? 1.0 : -1.0) * corner[v][axis];
-        if (normal[0] * up[0] + normal[1] * up[1] + normal[2] * up[2] < 0) std::reverse(cut.begin(), cut.begin() + count);
-        cases[static_cast<std::size_t>(pattern)] = MarchCase{count, cut};
-    }
-    return cases;
-}
-
-const std::array<MarchCase, 16> kCases = build_cases();
-
-struct EdgeEnds {
-    std::int32_t lo, hi;
-};
 
 // Finds or claims the slot of edge (lo, hi) in lo's bucket; returns its code
 // lo * kBucket + slot (check_domain keeps it within int32), or -1 if the
@@ -156,11 +106,7 @@ void march_chunk(const Domain& domain, const std::uint8_t* above, std::int32_t* 
         if (c.crossings == 3) {
             out.corners.insert(out.corners.end(), {code[0], code[1], code[2]});
         } else {
-            // Split the quad along the diagonal through its crossing of the
-            // edge with the smallest global key: a combinatorial rule, the
-            // same in every domain, node numbering and backend.
-            const int first_min = static_cast<int>(std::min_element(order, order + 4) - order);
-            if (first_min % 2 == 0)
+            if (extract_rules::split_through_first(order))
                 out.corners.insert(out.corners.end(), {code[0], code[1], code[2], code[0], code[2], code[3]});
             else
                 out.corners.insert(out.corners.end(), {code[1], code[2], code[3], code[1], code[3], code[0]});
@@ -177,20 +123,6 @@ int resolve_threads(int requested) {
 #endif
 }
 
-std::string domain_name(const Domain& domain) { return "domain " + std::to_string(domain.id); }
-
-void check_domain(const Domain& domain) {
-    const std::size_t n = domain.node_count();
-    if (domain.x.size() != n || domain.y.size() != n || domain.z.size() != n || domain.f.size() != n ||
-        domain.interface.size() != n)
-        throw Error(domain_name(domain) + ": node arrays differ in length");
-    if (domain.tets.size() % 4 != 0) throw Error(domain_name(domain) + ": tetrahedron array is not a multiple of 4");
-    if (!std::is_sorted(domain.shared_edges.begin(), domain.shared_edges.end()))
-        throw Error(domain_name(domain) + ": shared edge keys are not sorted");
-    if (n > static_cast<std::size_t>(INT32_MAX) / kBucket)
-        throw Error(domain_name(domain) + ": too many nodes for one domain (" + std::to_string(n) + ")");
-}
-
 // Vertex placement and flags for the crossing of edge (lo, hi).
 void place_vertex(const Domain& domain, float level, std::int32_t lo, std::int32_t hi, Piece& piece,
                   std::size_t vertex) {
@@ -199,20 +131,10 @@ void place_vertex(const Domain& domain, float level, std::int32_t lo, std::int32
     const bool lo_first = domain.gid[static_cast<std::size_t>(lo)] < domain.gid[static_cast<std::size_t>(hi)];
     const auto a = static_cast<std::size_t>(lo_first ? lo : hi);
     const auto b = static_cast<std::size_t>(lo_first ? hi : lo);
-    float t = (level - domain.f[a]) / (domain.f[b] - domain.f[a]);
-    t = std::clamp(t, 0.0f, 1.0f);
-    // A crossing closer to a node than float resolves along its edge is the
-    // node itself. Interpolated from a node at coordinate 0 it would land a
-    // denormal-sized step off it instead (3e-16 on meshes/cube.1), so that
-    // the vertices of all edges through that node, which ought to coincide
-    // and be merged by the reducer's zero-length collapses, form a triangle
-    // too small for the float normal and not short against its own edges.
-    constexpr float kResolved = 0x1p-24f;
-    if (t < kResolved) t = 0.0f;
-    else if (t > 1.0f - kResolved) t = 1.0f;
-    piece.x[vertex] = domain.x[a] + t * (domain.x[b] - domain.x[a]);
-    piece.y[vertex] = domain.y[a] + t * (domain.y[b] - domain.y[a]);
-    piece.z[vertex] = domain.z[a] + t * (domain.z[b] - domain.z[a]);
+    const float t = extract_rules::crossing_parameter(domain.f[a], domain.f[b], level);
+    piece.x[vertex] = extract_rules::interpolate(domain.x[a], domain.x[b], t);
+    piece.y[vertex] = extract_rules::interpolate(domain.y[a], domain.y[b], t);
+    piece.z[vertex] = extract_rules::interpolate(domain.z[a], domain.z[b], t);
     piece.key[vertex] = edge_key(domain.gid[a], domain.gid[b]);
     const bool shared = (domain.interface[a] & domain.interface[b]) != 0 &&
                         (domain.shared_edges.empty() ||
@@ -251,7 +173,7 @@ Piece extract_by_sorting(const Domain& domain, float level, const std::vector<st
         }
         if (c.crossings == 3) {
             corners.insert(corners.end(), {e[0], e[1], e[2]});
-        } else if ((std::min_element(order, order + 4) - order) % 2 == 0) {
+        } else if (extract_rules::split_through_first(order)) {
             corners.insert(corners.end(), {e[0], e[1], e[2], e[0], e[2], e[3]});
         } else {
             corners.insert(corners.end(), {e[1], e[2], e[3], e[1], e[3], e[0]});
@@ -273,12 +195,24 @@ Piece extract_by_sorting(const Domain& domain, float level, const std::vector<st
 
 } // namespace
 
+void extract_rules::check_domain(const Domain& domain) {
+    const std::size_t n = domain.node_count();
+    if (domain.x.size() != n || domain.y.size() != n || domain.z.size() != n || domain.f.size() != n ||
+        domain.interface.size() != n)
+        throw Error(domain_name(domain) + ": node arrays differ in length");
+    if (domain.tets.size() % 4 != 0) throw Error(domain_name(domain) + ": tetrahedron array is not a multiple of 4");
+    if (!std::is_sorted(domain.shared_edges.begin(), domain.shared_edges.end()))
+        throw Error(domain_name(domain) + ": shared edge keys are not sorted");
+    if (n > static_cast<std::size_t>(INT32_MAX) / kBucket)
+        throw Error(domain_name(domain) + ": too many nodes for one domain (" + std::to_string(n) + ")");
+}
+
 Piece extract(const Domain& domain, float level, const ExtractOptions& options) {
-    check_domain(domain);
+    extract_rules::check_domain(domain);
     const std::size_t nodes = domain.node_count();
     const std::size_t tets = domain.tet_count();
     const int threads = resolve_threads(options.threads);
-    if (!std::isfinite(level)) throw Error("isosurface level is not a finite number");
+    extract_rules::check_level(level);
 
     // 1. classify
     std::vector<std::uint8_t> above(nodes);
@@ -289,9 +223,7 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
         if (!std::isfinite(value)) bad_node = std::max(bad_node, v);
         above[static_cast<std::size_t>(v)] = value >= level ? 1 : 0;
     }
-    if (bad_node >= 0)
-        throw Error(domain_name(domain) + ": node " + std::to_string(domain.gid[static_cast<std::size_t>(bad_node)]) +
-                    " has a field value that is not finite");
+    if (bad_node >= 0) extract_rules::throw_bad_value(domain, static_cast<std::size_t>(bad_node));
 
     // 2. march
     std::vector<std::int32_t> slots(nodes * kBucket, kEmpty);
@@ -311,9 +243,7 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
     }
     bool overflow = false;
     for (const ChunkOutput& out : outputs) {
-        if (out.bad_tet >= 0)
-            throw Error(domain_name(domain) + ": tetrahedron " + std::to_string(out.bad_tet) +
-                        " refers to a node that does not exist");
+        if (out.bad_tet >= 0) extract_rules::throw_bad_tet(domain, out.bad_tet);
         overflow = overflow || out.overflow;
     }
     Piece piece;
@@ -361,7 +291,7 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
         }
     }
     if (piece.triangles.size() / 3 > static_cast<std::size_t>(INT32_MAX))
-        throw Error(domain_name(domain) + ": surface too large for 32-bit indices");
+        extract_rules::throw_too_large(domain);
     // Lattice domains number nodes in global order, so this is a no-op there.
     order_by_key(piece);
     piece.domains = {domain.id};

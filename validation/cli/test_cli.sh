@@ -57,6 +57,22 @@ mkdir -p "$work/folder.node"
 expect 2 "mesh whose .node is a directory" -- "$tetiso" extract --mesh "$work/folder" -o "$out/t.ply"
 meshes=$(cd "$(dirname "$0")/../../meshes" && pwd)
 expect 0 "extract from a TetGen mesh" -- "$tetiso" extract --mesh "$meshes/cube.1" --field torus --reduce -o "$out/t.vtp"
+expect 2 "unknown device" -- "$tetiso" extract --lattice 10 --device tpu -o "$out/s.ply"
+# --device gpu: where there is no GPU (CI) a one-line error that says so and no
+# file; where there is one, the same bytes as the CPU's, for the lattice in
+# domains and for the unstructured mesh.
+if "$tetiso" extract --lattice 8 --device gpu -o "$work/probe.ply" 2>"$work/probe.err"; then
+    for source in "--lattice 40 --domains 8 --field gyroid" "--mesh $meshes/cube.1 --field sphere"; do
+        # shellcheck disable=SC2086 # the source is several arguments
+        "$tetiso" extract $source -o "$work/cpu.ply" && "$tetiso" extract $source --device gpu -o "$work/gpu.ply" &&
+            cmp -s "$work/cpu.ply" "$work/gpu.ply" && passed=$((passed + 1)) ||
+            { echo "FAIL: --device gpu differs from the CPU for $source"; failures=$((failures + 1)); }
+    done
+else
+    expect 2 "--device gpu without a GPU" -- "$tetiso" extract --lattice 10 --device gpu -o "$out/s.ply"
+    grep -q "^tetiso: --device gpu: " "$work/stderr" && passed=$((passed + 1)) ||
+        { echo "FAIL: no-GPU error does not name --device gpu: $(cat "$work/stderr")"; failures=$((failures + 1)); }
+fi
 expect 2 "both --mesh and --lattice" -- "$tetiso" extract --mesh "$meshes/cube.1" --lattice 10 -o "$out/t.ply"
 expect 2 "missing mesh" -- "$tetiso" extract --mesh "$out/none" -o "$out/t.ply"
 expect 2 "mesh attribute it lacks" -- "$tetiso" extract --mesh "$meshes/cube.1" --attribute 0 -o "$out/t.ply"
