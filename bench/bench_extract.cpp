@@ -12,6 +12,11 @@
 //                                    the whole call, the domain uploaded and
 //                                    the piece downloaded each time; counters
 //                                    give the three stages' mean seconds
+//   extract/gpu-lattice/N:<N>/threads:1  the same from the field values alone:
+//                                    the device builds nodes and tetrahedra
+//   domain/tetiso/N:<N>/threads:1    make_domain + extract, one thread: a
+//                                    domain from nothing, as a job's task
+//   domain/gpu/N:<N>/threads:1       field_values + the GPU's lattice path
 // Only the extraction is timed: building the domain and converting it to a
 // vtkUnstructuredGrid happen once per N, outside the timed loops. All cases
 // check their vertex and triangle counts against each other in the report.
@@ -94,9 +99,15 @@ void bench_tetiso(benchmark::State& state, std::int64_t n, int threads) {
     set_size_counters(state, p.domain, vertices, triangles);
 }
 
+// One GPU for every case: its buffers outlive a case, as in a worker.
+tetiso::GpuExtractor& gpu_extractor() {
+    static tetiso::GpuExtractor gpu;
+    return gpu;
+}
+
 void bench_gpu(benchmark::State& state, std::int64_t n) {
     const Problem& p = problem(n);
-    static tetiso::GpuExtractor gpu; // its buffers outlive one case, as in a worker
+    tetiso::GpuExtractor& gpu = gpu_extractor();
     std::int64_t vertices = 0, triangles = 0;
     tetiso::GpuExtractTimings sum;
     for (auto _ : state) {
@@ -113,6 +124,47 @@ void bench_gpu(benchmark::State& state, std::int64_t n) {
     state.counters["upload_s"] = sum.upload / iterations;
     state.counters["compute_s"] = sum.compute / iterations;
     state.counters["download_s"] = sum.download / iterations;
+}
+
+void bench_gpu_lattice(benchmark::State& state, std::int64_t n) {
+    const Problem& p = problem(n);
+    const tetiso::Lattice lattice(n);
+    const tetiso::Decomposition one(lattice, 1);
+    const std::vector<float> values = one.field_values(0, *tetiso::make_field("paper"));
+    tetiso::GpuExtractor& gpu = gpu_extractor();
+    std::int64_t vertices = 0, triangles = 0;
+    tetiso::GpuExtractTimings sum;
+    for (auto _ : state) {
+        const tetiso::Piece piece = gpu.extract(one, 0, values, kLevel);
+        vertices = static_cast<std::int64_t>(piece.vertex_count());
+        triangles = static_cast<std::int64_t>(piece.triangle_count());
+        benchmark::DoNotOptimize(piece.triangles.data());
+        sum.upload += gpu.last_timings().upload;
+        sum.compute += gpu.last_timings().compute;
+        sum.download += gpu.last_timings().download;
+    }
+    set_size_counters(state, p.domain, vertices, triangles);
+    const auto iterations = static_cast<double>(state.iterations());
+    state.counters["upload_s"] = sum.upload / iterations;
+    state.counters["compute_s"] = sum.compute / iterations;
+    state.counters["download_s"] = sum.download / iterations;
+}
+
+// A domain from nothing to its piece, as a job's domain task makes it.
+void bench_domain(benchmark::State& state, std::int64_t n, bool on_gpu) {
+    const Problem& p = problem(n);
+    const tetiso::Lattice lattice(n);
+    const tetiso::Decomposition one(lattice, 1);
+    const auto field = tetiso::make_field("paper");
+    std::int64_t vertices = 0, triangles = 0;
+    for (auto _ : state) {
+        const tetiso::Piece piece = on_gpu ? gpu_extractor().extract(one, 0, one.field_values(0, *field), kLevel)
+                                           : tetiso::extract(one.make_domain(0, *field), kLevel);
+        vertices = static_cast<std::int64_t>(piece.vertex_count());
+        triangles = static_cast<std::int64_t>(piece.triangle_count());
+        benchmark::DoNotOptimize(piece.triangles.data());
+    }
+    set_size_counters(state, p.domain, vertices, triangles);
 }
 
 #ifdef TETISO_HAVE_VTK
@@ -154,7 +206,12 @@ int main(int argc, char** argv) {
         for (const int threads : thread_counts())
             register_timed(case_name("extract/vtk", n, threads), bench_vtk, n, threads);
 #endif
-        if (gpu.available) register_timed(case_name("extract/gpu", n, 1), bench_gpu, n);
+        register_timed(case_name("domain/tetiso", n, 1), bench_domain, n, false);
+        if (gpu.available) {
+            register_timed(case_name("extract/gpu", n, 1), bench_gpu, n);
+            register_timed(case_name("extract/gpu-lattice", n, 1), bench_gpu_lattice, n);
+            register_timed(case_name("domain/gpu", n, 1), bench_domain, n, true);
+        }
     }
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();

@@ -49,14 +49,16 @@ public:
         }
     }
 
+    bool on_gpu() const { return gpu_ != nullptr; }
+
     Piece operator()(const Domain& domain, float level) {
         if (!gpu_) return extract(domain, level, ExtractOptions{threads_});
-        Piece piece = gpu_->extract(domain, level);
-        const GpuExtractTimings& t = gpu_->last_timings();
-        upload_ += t.upload;
-        compute_ += t.compute;
-        download_ += t.download;
-        return piece;
+        return count(gpu_->extract(domain, level));
+    }
+
+    // A lattice domain on the GPU, which builds all but its values.
+    Piece operator()(const Decomposition& decomposition, int domain, const std::vector<float>& values, float level) {
+        return count(gpu_->extract(decomposition, domain, values, level));
     }
 
     nlohmann::json json() const {
@@ -67,6 +69,14 @@ public:
     }
 
 private:
+    Piece count(Piece piece) {
+        const GpuExtractTimings& t = gpu_->last_timings();
+        upload_ += t.upload;
+        compute_ += t.compute;
+        download_ += t.download;
+        return piece;
+    }
+
     int threads_;
     std::unique_ptr<GpuExtractor> gpu_;
     std::string description_;
@@ -154,9 +164,14 @@ void run_extract(const ExtractArguments& args) {
     pieces.reserve(static_cast<std::size_t>(args.domains));
     for (int d = 0; d < decomposition.domain_count(); ++d) {
         const double t0 = now_seconds();
-        const Domain domain = decomposition.make_domain(d, *field);
+        // On the GPU only the field values are made here (the device builds
+        // the rest); on the CPU the whole domain.
+        Domain domain;
+        if (extractor.on_gpu()) domain.f = decomposition.field_values(d, *field);
+        else domain = decomposition.make_domain(d, *field);
         const double t1 = now_seconds();
-        pieces.push_back(extractor(domain, static_cast<float>(level)));
+        pieces.push_back(extractor.on_gpu() ? extractor(decomposition, d, domain.f, static_cast<float>(level))
+                                            : extractor(domain, static_cast<float>(level)));
         extract_seconds += now_seconds() - t1;
         generate_seconds += t1 - t0;
         const auto [lo, hi] = std::minmax_element(domain.f.begin(), domain.f.end());

@@ -199,12 +199,12 @@ void extract_rules::check_domain(const Domain& domain) {
     const std::size_t n = domain.node_count();
     if (domain.x.size() != n || domain.y.size() != n || domain.z.size() != n || domain.f.size() != n ||
         domain.interface.size() != n)
-        throw Error(domain_name(domain) + ": node arrays differ in length");
-    if (domain.tets.size() % 4 != 0) throw Error(domain_name(domain) + ": tetrahedron array is not a multiple of 4");
+        throw Error(domain_name(domain.id) + ": node arrays differ in length");
+    if (domain.tets.size() % 4 != 0) throw Error(domain_name(domain.id) + ": tetrahedron array is not a multiple of 4");
     if (!std::is_sorted(domain.shared_edges.begin(), domain.shared_edges.end()))
-        throw Error(domain_name(domain) + ": shared edge keys are not sorted");
+        throw Error(domain_name(domain.id) + ": shared edge keys are not sorted");
     if (n > static_cast<std::size_t>(INT32_MAX) / kBucket)
-        throw Error(domain_name(domain) + ": too many nodes for one domain (" + std::to_string(n) + ")");
+        throw Error(domain_name(domain.id) + ": too many nodes for one domain (" + std::to_string(n) + ")");
 }
 
 Piece extract(const Domain& domain, float level, const ExtractOptions& options) {
@@ -223,7 +223,7 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
         if (!std::isfinite(value)) bad_node = std::max(bad_node, v);
         above[static_cast<std::size_t>(v)] = value >= level ? 1 : 0;
     }
-    if (bad_node >= 0) extract_rules::throw_bad_value(domain, static_cast<std::size_t>(bad_node));
+    if (bad_node >= 0) extract_rules::throw_bad_value(domain.id, domain.gid[static_cast<std::size_t>(bad_node)]);
 
     // 2. march
     std::vector<std::int32_t> slots(nodes * kBucket, kEmpty);
@@ -243,7 +243,7 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
     }
     bool overflow = false;
     for (const ChunkOutput& out : outputs) {
-        if (out.bad_tet >= 0) extract_rules::throw_bad_tet(domain, out.bad_tet);
+        if (out.bad_tet >= 0) extract_rules::throw_bad_tet(domain.id, out.bad_tet);
         overflow = overflow || out.overflow;
     }
     Piece piece;
@@ -291,7 +291,7 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
         }
     }
     if (piece.triangles.size() / 3 > static_cast<std::size_t>(INT32_MAX))
-        extract_rules::throw_too_large(domain);
+        extract_rules::throw_too_large(domain.id);
     // Lattice domains number nodes in global order, so this is a no-op there.
     order_by_key(piece);
     piece.domains = {domain.id};

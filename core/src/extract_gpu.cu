@@ -28,6 +28,7 @@
 
 #include "extract_rules.hpp"
 #include "tetiso/error.hpp"
+#include "tetiso/lattice.hpp"
 
 namespace tetiso {
 namespace {
@@ -110,6 +111,32 @@ unsigned blocks_for(std::size_t n) {
     for (std::size_t i = blockIdx.x * static_cast<std::size_t>(blockDim.x) + threadIdx.x; i < (n); \
          i += static_cast<std::size_t>(gridDim.x) * blockDim.x)
 
+// The nodes of a lattice domain, as Decomposition::make_domain makes them.
+struct LatticeNodes {
+    std::int64_t n;               // lattice nodes per axis
+    std::int64_t lo[3], px, py;   // the box's first node and its nodes per axis (x, y)
+    std::int64_t nx, ny, nz;      // cells per axis
+    unsigned open_faces;          // the box's faces that are interfaces
+};
+
+__global__ void make_lattice_nodes(std::size_t count, LatticeNodes box, float* x, float* y, float* z, GlobalId* gid,
+                                   u8* interface) {
+    TETISO_FOR_EACH(v, count) {
+        const auto node = static_cast<std::int64_t>(v);
+        const std::int64_t i = node % box.px, j = (node / box.px) % box.py, k = node / (box.px * box.py);
+        const std::int64_t gi = box.lo[0] + i, gj = box.lo[1] + j, gk = box.lo[2] + k;
+        // Lattice::coordinate: the same double operations, then one rounding.
+        const double last = static_cast<double>(box.n - 1);
+        x[v] = static_cast<float>(kLatticeExtent * static_cast<double>(gi) / last);
+        y[v] = static_cast<float>(kLatticeExtent * static_cast<double>(gj) / last);
+        z[v] = static_cast<float>(kLatticeExtent * static_cast<double>(gk) / last);
+        gid[v] = gi + box.n * (gj + box.n * gk);
+        const unsigned faces = (i == 0 ? 1u : 0u) | (i == box.nx ? 2u : 0u) | (j == 0 ? 4u : 0u) |
+                               (j == box.ny ? 8u : 0u) | (k == 0 ? 16u : 0u) | (k == box.nz ? 32u : 0u);
+        interface[v] = static_cast<u8>(faces & box.open_faces);
+    }
+}
+
 // 1. classify. bad_node: one more than the largest node whose value is not
 // finite (0: none), the node the CPU names.
 __global__ void classify_nodes(std::size_t n, const float* f, float level, u8* above,
@@ -123,10 +150,11 @@ __global__ void classify_nodes(std::size_t n, const float* f, float level, u8* a
 
 // 2a. count. bad_tet: the smallest tetrahedron naming a node that does not
 // exist (ULLONG_MAX: none), the one the CPU names.
-__global__ void count_crossings(std::size_t tets, const int4* corners, u32 nodes, const u8* above, u8* pattern,
+template <class Tets>
+__global__ void count_crossings(std::size_t tets, Tets corners, u32 nodes, const u8* above, u8* pattern,
                                 u32* crossings, u32* triangles, unsigned long long* bad_tet) {
     TETISO_FOR_EACH(t, tets) {
-        const int4 v = corners[t];
+        const int4 v = corners(t);
         unsigned p = 0;
         if (static_cast<u32>(v.x) >= nodes || static_cast<u32>(v.y) >= nodes || static_cast<u32>(v.z) >= nodes ||
             static_cast<u32>(v.w) >= nodes)
@@ -140,6 +168,32 @@ __global__ void count_crossings(std::size_t tets, const int4* corners, u32 nodes
     }
 }
 
+// Where the per-tetrahedron kernels read a tetrahedron: an uploaded array, or
+// the lattice's Freudenthal split computed from the tetrahedron's index, in
+// make_domain's order (cells x fastest, six per cell).
+struct TetArray {
+    const int4* corners;
+    __device__ int4 operator()(std::size_t t) const { return corners[t]; }
+};
+
+__constant__ int c_cell_orders[6][3];
+
+struct LatticeTets {
+    std::int64_t nx, ny, px, py; // cells and nodes per axis (x, y)
+    __device__ int4 operator()(std::size_t t) const {
+        const auto cell = static_cast<std::int64_t>(t / 6);
+        const int which = static_cast<int>(t % 6);
+        const std::int64_t i = cell % nx, j = (cell / nx) % ny, k = cell / (nx * ny);
+        const std::int64_t stride[3] = {1, px, px * py};
+        const std::int64_t origin = i + px * (j + py * k);
+        const std::int64_t v1 = origin + stride[c_cell_orders[which][0]];
+        const std::int64_t v2 = v1 + stride[c_cell_orders[which][1]];
+        const bool odd = which >= 3;
+        return make_int4(static_cast<int>(origin), static_cast<int>(odd ? v2 : v1), static_cast<int>(odd ? v1 : v2),
+                         static_cast<int>(origin + 1 + px + px * py));
+    }
+};
+
 __device__ inline int corner_of(const int4& v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : (k == 2 ? v.z : v.w)); }
 
 __device__ inline u64 edge_code(const int4& v, unsigned p, int k) {
@@ -149,13 +203,14 @@ __device__ inline u64 edge_code(const int4& v, unsigned p, int k) {
 }
 
 // 2b. emit: each cut tetrahedron writes its crossing edges' codes.
-__global__ void emit_crossings(std::size_t tets, const int4* corners, const u8* pattern, const u32* first,
+template <class Tets>
+__global__ void emit_crossings(std::size_t tets, Tets corners, const u8* pattern, const u32* first,
                                u64* codes) {
     TETISO_FOR_EACH(t, tets) {
         const unsigned p = pattern[t];
         const int count = c_cases.crossings[p];
         if (count == 0) continue;
-        const int4 v = corners[t];
+        const int4 v = corners(t);
         u64* out = codes + first[t];
         for (int k = 0; k < count; ++k) out[k] = edge_code(v, p, k);
     }
@@ -213,13 +268,14 @@ __device__ inline i32 vertex_of(const u64* edges, std::size_t n, u64 code) {
 }
 
 // 5. connect: a cut tetrahedron's one or two triangles, in tetrahedron order.
-__global__ void connect(std::size_t tets, const int4* corners, const u8* pattern, const u32* first_triangle,
+template <class Tets>
+__global__ void connect(std::size_t tets, Tets corners, const u8* pattern, const u32* first_triangle,
                         const u64* edges, std::size_t vertex_count, const GlobalId* gid, i32* triangles) {
     TETISO_FOR_EACH(t, tets) {
         const unsigned p = pattern[t];
         const int count = c_cases.crossings[p];
         if (count == 0) continue;
-        const int4 v = corners[t];
+        const int4 v = corners(t);
         i32 vertex[4];
         EdgeKey order[4];
         for (int k = 0; k < count; ++k) {
@@ -315,6 +371,12 @@ struct GpuExtractor::Buffers {
         return scratch.data();
     }
 
+    // Every pass after the domain's node arrays are on the device (and
+    // tet_source can read its tetrahedra); start: when the compute began.
+    template <class Tets>
+    Piece run(int domain_id, Tets tet_source, std::size_t nodes, std::size_t tets, float level,
+              GpuExtractTimings& timings, std::chrono::steady_clock::time_point start);
+
     unsigned long long read_scalar(std::size_t i) {
         unsigned long long value = 0;
         check_cuda(cudaMemcpyAsync(&value, scalars.data() + i, sizeof value, cudaMemcpyDeviceToHost, stream),
@@ -343,34 +405,16 @@ GpuExtractor::GpuExtractor(int device) : buffers_(std::make_unique<Buffers>()) {
     check_cuda(cudaStreamCreateWithFlags(&buffers_->stream, cudaStreamNonBlocking), "cudaStreamCreate");
     const CaseTable table = make_case_table();
     check_cuda(cudaMemcpyToSymbol(c_cases, &table, sizeof table), "copying the case table");
+    check_cuda(cudaMemcpyToSymbol(c_cell_orders, kCellTetOrders, sizeof kCellTetOrders), "copying the cell split");
     buffers_->scalars.resize(4, "scalars");
 }
 
 GpuExtractor::~GpuExtractor() = default;
 
-Piece GpuExtractor::extract(const Domain& domain, float level) {
-    extract_rules::check_domain(domain);
-    extract_rules::check_level(level);
-    Buffers& b = *buffers_;
-    check_cuda(cudaSetDevice(b.device), "cudaSetDevice");
-    cudaStream_t stream = b.stream;
-    const std::size_t nodes = domain.node_count();
-    const std::size_t tets = domain.tet_count();
-    if (tets > UINT32_MAX / 4) throw Error(extract_rules::domain_name(domain) + ": too many tetrahedra for the GPU path");
-
-    auto start = std::chrono::steady_clock::now();
-    b.x.upload(domain.x, stream, "uploading x");
-    b.y.upload(domain.y, stream, "uploading y");
-    b.z.upload(domain.z, stream, "uploading z");
-    b.f.upload(domain.f, stream, "uploading f");
-    b.gid.upload(domain.gid, stream, "uploading node ids");
-    b.interface.upload(domain.interface, stream, "uploading interface masks");
-    b.shared.upload(domain.shared_edges, stream, "uploading shared edges");
-    b.tets.upload(domain.tets, stream, "uploading tetrahedra");
-    check_cuda(cudaStreamSynchronize(stream), "uploading the domain");
-    timings_.upload = seconds_since(start);
-    start = std::chrono::steady_clock::now();
-
+template <class Tets>
+Piece GpuExtractor::Buffers::run(int domain_id, Tets tet_source, std::size_t nodes, std::size_t tets, float level,
+                                 GpuExtractTimings& timings, std::chrono::steady_clock::time_point start) {
+    Buffers& b = *this;
     // 1. classify
     const unsigned long long no_tet = ULLONG_MAX, zero = 0;
     check_cuda(cudaMemcpyAsync(b.scalars.data(), &zero, sizeof zero, cudaMemcpyHostToDevice, stream), "reset");
@@ -381,8 +425,11 @@ Piece GpuExtractor::extract(const Domain& domain, float level) {
                                                                   b.scalars.data());
         check_launch("classify_nodes");
     }
-    if (const unsigned long long bad = b.read_scalar(0))
-        extract_rules::throw_bad_value(domain, static_cast<std::size_t>(bad - 1));
+    if (const unsigned long long bad = b.read_scalar(0)) {
+        GlobalId id = 0;
+        check_cuda(cudaMemcpy(&id, b.gid.data() + (bad - 1), sizeof id, cudaMemcpyDeviceToHost), "reading a node id");
+        extract_rules::throw_bad_value(domain_id, id);
+    }
 
     // 2. count and emit the crossings
     b.pattern.resize(tets, "tetrahedron cases");
@@ -390,17 +437,16 @@ Piece GpuExtractor::extract(const Domain& domain, float level) {
     b.triangles_per_tet.resize(tets + 1, "triangle counts");
     b.first_crossing.resize(tets + 1, "crossing offsets");
     b.first_triangle.resize(tets + 1, "triangle offsets");
-    const auto* corners = reinterpret_cast<const int4*>(b.tets.data());
     check_cuda(cudaMemsetAsync(b.crossings.data() + tets, 0, sizeof(u32), stream), "reset");
     check_cuda(cudaMemsetAsync(b.triangles_per_tet.data() + tets, 0, sizeof(u32), stream), "reset");
     if (tets) {
-        count_crossings<<<blocks_for(tets), kBlock, 0, stream>>>(tets, corners, static_cast<u32>(nodes),
+        count_crossings<<<blocks_for(tets), kBlock, 0, stream>>>(tets, tet_source, static_cast<u32>(nodes),
                                                                   b.above.data(), b.pattern.data(), b.crossings.data(),
                                                                   b.triangles_per_tet.data(), b.scalars.data() + 1);
         check_launch("count_crossings");
     }
     if (const unsigned long long bad = b.read_scalar(1); bad != no_tet)
-        extract_rules::throw_bad_tet(domain, static_cast<std::int64_t>(bad));
+        extract_rules::throw_bad_tet(domain_id, static_cast<std::int64_t>(bad));
     std::size_t scratch_bytes = 0;
     check_cuda(cub::DeviceScan::ExclusiveSum(nullptr, scratch_bytes, b.crossings.data(), b.first_crossing.data(),
                                              tets + 1, stream),
@@ -418,13 +464,13 @@ Piece GpuExtractor::extract(const Domain& domain, float level) {
                "reading the triangle count");
     check_cuda(cudaStreamSynchronize(stream), "counting crossings");
     const std::size_t crossing_count = totals[0], triangle_count = totals[1];
-    if (triangle_count > static_cast<std::size_t>(INT32_MAX)) extract_rules::throw_too_large(domain);
+    if (triangle_count > static_cast<std::size_t>(INT32_MAX)) extract_rules::throw_too_large(domain_id);
 
     b.codes.resize(crossing_count, "crossing codes");
     b.sorted_codes.resize(crossing_count, "sorted crossing codes");
     b.edges.resize(crossing_count, "crossing edges");
     if (tets) {
-        emit_crossings<<<blocks_for(tets), kBlock, 0, stream>>>(tets, corners, b.pattern.data(),
+        emit_crossings<<<blocks_for(tets), kBlock, 0, stream>>>(tets, tet_source, b.pattern.data(),
                                                                  b.first_crossing.data(), b.codes.data());
         check_launch("emit_crossings");
     }
@@ -466,7 +512,7 @@ Piece GpuExtractor::extract(const Domain& domain, float level) {
                                                                          b.shared.data(), b.shared.size(), level,
                                                                          vertices);
         check_launch("place_vertices");
-        connect<<<blocks_for(tets), kBlock, 0, stream>>>(tets, corners, b.pattern.data(), b.first_triangle.data(),
+        connect<<<blocks_for(tets), kBlock, 0, stream>>>(tets, tet_source, b.pattern.data(), b.first_triangle.data(),
                                                           b.edges.data(), vertex_count, b.gid.data(), b.corners.data());
         check_launch("connect");
     }
@@ -512,7 +558,7 @@ Piece GpuExtractor::extract(const Domain& domain, float level) {
         }
     }
     check_cuda(cudaStreamSynchronize(stream), "extracting");
-    timings_.compute = seconds_since(start);
+    timings.compute = seconds_since(start);
     start = std::chrono::steady_clock::now();
 
     Piece piece;
@@ -534,9 +580,78 @@ Piece GpuExtractor::extract(const Domain& domain, float level) {
     fetch(piece.flags, pflags, vertex_count);
     fetch(piece.triangles, b.corners.data(), 3 * triangle_count);
     check_cuda(cudaStreamSynchronize(stream), "downloading the piece");
-    piece.domains = {domain.id};
-    timings_.download = seconds_since(start);
+    piece.domains = {domain_id};
+    timings.download = seconds_since(start);
     return piece;
+}
+
+Piece GpuExtractor::extract(const Domain& domain, float level) {
+    extract_rules::check_domain(domain);
+    extract_rules::check_level(level);
+    Buffers& b = *buffers_;
+    check_cuda(cudaSetDevice(b.device), "cudaSetDevice");
+    const std::size_t tets = domain.tet_count();
+    if (tets > UINT32_MAX / 4)
+        throw Error(extract_rules::domain_name(domain.id) + ": too many tetrahedra for the GPU path");
+    auto start = std::chrono::steady_clock::now();
+    b.x.upload(domain.x, b.stream, "uploading x");
+    b.y.upload(domain.y, b.stream, "uploading y");
+    b.z.upload(domain.z, b.stream, "uploading z");
+    b.f.upload(domain.f, b.stream, "uploading f");
+    b.gid.upload(domain.gid, b.stream, "uploading node ids");
+    b.interface.upload(domain.interface, b.stream, "uploading interface masks");
+    b.shared.upload(domain.shared_edges, b.stream, "uploading shared edges");
+    b.tets.upload(domain.tets, b.stream, "uploading tetrahedra");
+    check_cuda(cudaStreamSynchronize(b.stream), "uploading the domain");
+    timings_.upload = seconds_since(start);
+    return b.run(domain.id, TetArray{reinterpret_cast<const int4*>(b.tets.data())}, domain.node_count(), tets, level,
+                 timings_, std::chrono::steady_clock::now());
+}
+
+Piece GpuExtractor::extract(const Decomposition& decomposition, int domain, const std::vector<float>& values,
+                            float level) {
+    const CellBox& box = decomposition.box(domain);
+    const std::size_t nodes = decomposition.node_count(domain);
+    if (values.size() != nodes) throw Error(extract_rules::domain_name(domain) + ": node arrays differ in length");
+    if (nodes > static_cast<std::size_t>(INT32_MAX) / extract_rules::kBucket)
+        throw Error(extract_rules::domain_name(domain) + ": too many nodes for one domain (" + std::to_string(nodes) +
+                    ")");
+    extract_rules::check_level(level);
+    const std::size_t tets = static_cast<std::size_t>(box.cells()) * 6;
+    if (tets > UINT32_MAX / 4)
+        throw Error(extract_rules::domain_name(domain) + ": too many tetrahedra for the GPU path");
+    Buffers& b = *buffers_;
+    check_cuda(cudaSetDevice(b.device), "cudaSetDevice");
+    auto start = std::chrono::steady_clock::now();
+    b.f.upload(values, b.stream, "uploading f");
+    check_cuda(cudaStreamSynchronize(b.stream), "uploading the field values");
+    timings_.upload = seconds_since(start);
+
+    start = std::chrono::steady_clock::now();
+    const std::int64_t n = decomposition.lattice().n();
+    LatticeNodes nodes_of{};
+    nodes_of.n = n;
+    for (int axis = 0; axis < 3; ++axis) nodes_of.lo[axis] = box.lo[static_cast<std::size_t>(axis)];
+    nodes_of.nx = box.hi[0] - box.lo[0];
+    nodes_of.ny = box.hi[1] - box.lo[1];
+    nodes_of.nz = box.hi[2] - box.lo[2];
+    nodes_of.px = nodes_of.nx + 1;
+    nodes_of.py = nodes_of.ny + 1;
+    nodes_of.open_faces = (box.lo[0] > 0 ? 1u : 0u) | (box.hi[0] < n - 1 ? 2u : 0u) | (box.lo[1] > 0 ? 4u : 0u) |
+                          (box.hi[1] < n - 1 ? 8u : 0u) | (box.lo[2] > 0 ? 16u : 0u) | (box.hi[2] < n - 1 ? 32u : 0u);
+    b.x.resize(nodes, "x");
+    b.y.resize(nodes, "y");
+    b.z.resize(nodes, "z");
+    b.gid.resize(nodes, "node ids");
+    b.interface.resize(nodes, "interface masks");
+    b.shared.resize(0, "shared edges"); // a box's node masks tell its shared edges
+    if (nodes) {
+        make_lattice_nodes<<<blocks_for(nodes), kBlock, 0, b.stream>>>(nodes, nodes_of, b.x.data(), b.y.data(),
+                                                                        b.z.data(), b.gid.data(), b.interface.data());
+        check_launch("make_lattice_nodes");
+    }
+    const LatticeTets tet_source{nodes_of.nx, nodes_of.ny, nodes_of.px, nodes_of.py};
+    return b.run(domain, tet_source, nodes, tets, level, timings_, start);
 }
 
 } // namespace tetiso

@@ -16,4 +16,8 @@ GpuExtractor::~GpuExtractor() = default;
 
 Piece GpuExtractor::extract(const Domain&, float) { throw Error("GPU extraction: " + gpu_info().description); }
 
+Piece GpuExtractor::extract(const Decomposition&, int, const std::vector<float>&, float) {
+    throw Error("GPU extraction: " + gpu_info().description);
+}
+
 } // namespace tetiso

@@ -121,7 +121,7 @@ TETISO_HOST_DEVICE inline bool split_through_first(const EdgeKey order[4]) {
 // addressed by int32.
 inline constexpr int kBucket = 8;
 
-inline std::string domain_name(const Domain& domain) { return "domain " + std::to_string(domain.id); }
+inline std::string domain_name(int id) { return "domain " + std::to_string(id); }
 
 // The checks made before any work, the same for every backend.
 void check_domain(const Domain& domain);
@@ -130,16 +130,15 @@ inline void check_level(float level) {
     if (!std::isfinite(level)) throw Error("isosurface level is not a finite number");
 }
 
-[[noreturn]] inline void throw_bad_value(const Domain& domain, std::size_t node) {
-    throw Error(domain_name(domain) + ": node " + std::to_string(domain.gid[node]) +
-                " has a field value that is not finite");
+[[noreturn]] inline void throw_bad_value(int domain, GlobalId node) {
+    throw Error(domain_name(domain) + ": node " + std::to_string(node) + " has a field value that is not finite");
 }
 
-[[noreturn]] inline void throw_bad_tet(const Domain& domain, std::int64_t tet) {
+[[noreturn]] inline void throw_bad_tet(int domain, std::int64_t tet) {
     throw Error(domain_name(domain) + ": tetrahedron " + std::to_string(tet) + " refers to a node that does not exist");
 }
 
-[[noreturn]] inline void throw_too_large(const Domain& domain) {
+[[noreturn]] inline void throw_too_large(int domain) {
     throw Error(domain_name(domain) + ": surface too large for 32-bit indices");
 }
 

@@ -101,21 +101,41 @@ std::vector<int> Decomposition::domains_of_edge(GlobalId a, GlobalId b) const {
     return result;
 }
 
+std::size_t Decomposition::node_count(int domain) const {
+    const std::int64_t nodes = boxes_.at(static_cast<std::size_t>(domain)).nodes();
+    if (nodes > INT32_MAX)
+        throw Error("domain " + std::to_string(domain) + " has too many nodes for 32-bit local indices");
+    return static_cast<std::size_t>(nodes);
+}
+
+std::vector<float> Decomposition::field_values(int domain, const Field& field) const {
+    const CellBox& box = boxes_.at(static_cast<std::size_t>(domain));
+    std::vector<float> f(node_count(domain));
+    const std::int64_t px = box.hi[0] - box.lo[0] + 1, py = box.hi[1] - box.lo[1] + 1, pz = box.hi[2] - box.lo[2] + 1;
+    std::vector<double> xs(static_cast<std::size_t>(px)), ys(xs.size()), zs(xs.size());
+    for (std::int64_t i = 0; i < px; ++i) xs[static_cast<std::size_t>(i)] = lattice_.coordinate(box.lo[0] + i);
+    for (std::int64_t k = 0; k < pz; ++k)
+        for (std::int64_t j = 0; j < py; ++j) {
+            std::fill(ys.begin(), ys.end(), lattice_.coordinate(box.lo[1] + j));
+            std::fill(zs.begin(), zs.end(), lattice_.coordinate(box.lo[2] + k));
+            field.evaluate(xs.data(), ys.data(), zs.data(), xs.size(), f.data() + px * (j + py * k));
+        }
+    return f;
+}
+
 Domain Decomposition::make_domain(int domain, const Field& field) const {
     const CellBox& box = boxes_.at(static_cast<std::size_t>(domain));
     const std::int64_t n = lattice_.n();
     const std::int64_t nx = box.hi[0] - box.lo[0], ny = box.hi[1] - box.lo[1], nz = box.hi[2] - box.lo[2];
     const std::int64_t px = nx + 1, py = ny + 1, pz = nz + 1; // nodes per axis
-    const std::size_t nodes = static_cast<std::size_t>(px * py * pz);
-    if (nodes > static_cast<std::size_t>(INT32_MAX))
-        throw Error("domain " + std::to_string(domain) + " has too many nodes for 32-bit local indices");
+    const std::size_t nodes = node_count(domain);
 
     Domain out;
     out.id = domain;
     out.x.resize(nodes);
     out.y.resize(nodes);
     out.z.resize(nodes);
-    out.f.resize(nodes);
+    out.f = field_values(domain, field);
     out.gid.resize(nodes);
     out.interface.resize(nodes);
 
@@ -124,8 +144,6 @@ Domain Decomposition::make_domain(int domain, const Field& field) const {
         (box.lo[0] > 0 ? 1u : 0u) | (box.hi[0] < n - 1 ? 2u : 0u) | (box.lo[1] > 0 ? 4u : 0u) |
         (box.hi[1] < n - 1 ? 8u : 0u) | (box.lo[2] > 0 ? 16u : 0u) | (box.hi[2] < n - 1 ? 32u : 0u));
 
-    std::vector<double> xs(static_cast<std::size_t>(px)), ys(xs.size()), zs(xs.size());
-    std::vector<float> row(xs.size());
     for (std::int64_t k = 0; k < pz; ++k) {
         for (std::int64_t j = 0; j < py; ++j) {
             const std::size_t first = static_cast<std::size_t>(px * (j + py * k));
@@ -133,18 +151,14 @@ Domain Decomposition::make_domain(int domain, const Field& field) const {
             for (std::int64_t i = 0; i < px; ++i) {
                 const std::int64_t gi = box.lo[0] + i;
                 const std::size_t v = first + static_cast<std::size_t>(i);
-                xs[static_cast<std::size_t>(i)] = lattice_.coordinate(gi);
-                ys[static_cast<std::size_t>(i)] = lattice_.coordinate(gj);
-                zs[static_cast<std::size_t>(i)] = lattice_.coordinate(gk);
-                out.x[v] = static_cast<float>(xs[static_cast<std::size_t>(i)]);
-                out.y[v] = static_cast<float>(ys[static_cast<std::size_t>(i)]);
-                out.z[v] = static_cast<float>(zs[static_cast<std::size_t>(i)]);
+                out.x[v] = static_cast<float>(lattice_.coordinate(gi));
+                out.y[v] = static_cast<float>(lattice_.coordinate(gj));
+                out.z[v] = static_cast<float>(lattice_.coordinate(gk));
                 out.gid[v] = lattice_.node_id(gi, gj, gk);
                 const unsigned faces = (i == 0 ? 1u : 0u) | (i == nx ? 2u : 0u) | (j == 0 ? 4u : 0u) |
                                        (j == ny ? 8u : 0u) | (k == 0 ? 16u : 0u) | (k == nz ? 32u : 0u);
                 out.interface[v] = static_cast<std::uint8_t>(faces & open_faces);
             }
-            field.evaluate(xs.data(), ys.data(), zs.data(), xs.size(), out.f.data() + first);
         }
     }
 
@@ -153,7 +167,6 @@ Domain Decomposition::make_domain(int domain, const Field& field) const {
     // split is the same in every cell, so shared faces match. An ordering of
     // odd parity gives a negatively oriented walk; swapping its middle two
     // vertices makes it positive.
-    static constexpr int kOrders[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
     const std::int64_t stride[3] = {1, px, px * py};
     out.tets.resize(static_cast<std::size_t>(nx * ny * nz) * 24);
     std::int32_t* tet = out.tets.data();
@@ -162,8 +175,8 @@ Domain Decomposition::make_domain(int domain, const Field& field) const {
             for (std::int64_t i = 0; i < nx; ++i) {
                 const std::int64_t origin = i + px * (j + py * k);
                 for (int t = 0; t < 6; ++t) {
-                    const std::int64_t v1 = origin + stride[kOrders[t][0]];
-                    const std::int64_t v2 = v1 + stride[kOrders[t][1]];
+                    const std::int64_t v1 = origin + stride[kCellTetOrders[t][0]];
+                    const std::int64_t v2 = v1 + stride[kCellTetOrders[t][1]];
                     const bool odd = t >= 3;
                     tet[0] = static_cast<std::int32_t>(origin);
                     tet[1] = static_cast<std::int32_t>(odd ? v2 : v1);

@@ -104,6 +104,9 @@ TEST_P(GpuLattice, EveryDomainIsTheCpuPieceBitForBit) {
         const Piece cpu = extract(domain, level);
         triangles += cpu.triangle_count();
         EXPECT_TRUE(identical(cpu, gpu().extract(domain, level))) << "domain " << d;
+        // The lattice path: only the values uploaded, the rest built on the device.
+        EXPECT_TRUE(identical(cpu, gpu().extract(decomposition, d, decomposition.field_values(d, *field), level)))
+            << "domain " << d << ", built on the device";
     }
     EXPECT_GT(triangles, 0u); // the case has a surface to compare
 }
@@ -241,6 +244,22 @@ TEST(Gpu, BadDomainsGiveTheCpuErrors) {
               error_of([&] { gpu().extract(domain, std::numeric_limits<float>::infinity()); }));
     // A failed call leaves the extractor usable.
     EXPECT_TRUE(identical(extract(domain, 0.5f), gpu().extract(domain, 0.5f)));
+}
+
+TEST(Gpu, BadLatticeValuesGiveTheCpuErrors) {
+    SKIP_WITHOUT_GPU();
+    const Lattice lattice(11);
+    const Decomposition four(lattice, 4);
+    // Infinite on the plane x = 2.5, which holds lattice nodes.
+    const auto pole = make_field("1/(x-2.5)");
+    for (int d = 0; d < four.domain_count(); ++d) {
+        const std::string cpu = error_of([&] { extract(four.make_domain(d, *pole), 0.5f); });
+        EXPECT_EQ(cpu, error_of([&] { gpu().extract(four, d, four.field_values(d, *pole), 0.5f); })) << d;
+    }
+    std::vector<float> short_values = four.field_values(0, *make_field("paper"));
+    short_values.pop_back();
+    EXPECT_NE(error_of([&] { gpu().extract(four, 0, short_values, 0.5f); }).find("domain 0: node arrays differ"),
+              std::string::npos);
 }
 
 TEST(Gpu, EmptyDomainsAndLevelsOutsideTheRangeGiveEmptyPieces) {

@@ -17,6 +17,7 @@
 #include <memory>
 #include <string>
 
+#include "tetiso/lattice.hpp"
 #include "tetiso/mesh.hpp"
 
 namespace tetiso {
@@ -51,6 +52,13 @@ public:
     // node that does not exist, a surface too large). A CUDA failure (out of
     // device memory, say) is a tetiso::Error naming the call.
     Piece extract(const Domain& domain, float level);
+
+    // A domain of the lattice test problem from its field values alone
+    // (Decomposition::field_values): the device builds its positions, node
+    // ids, interface masks and tetrahedra as make_domain does, so the surface
+    // is extract(decomposition.make_domain(domain, field), level)'s while
+    // 4 bytes per node cross the bus instead of some 125.
+    Piece extract(const Decomposition& decomposition, int domain, const std::vector<float>& values, float level);
 
     const GpuExtractTimings& last_timings() const { return timings_; }
 

@@ -19,6 +19,10 @@ namespace tetiso {
 
 inline constexpr double kLatticeExtent = 5.0; // the cube is [0, kLatticeExtent]^3
 
+// The six tetrahedra of a cell, one per ordering of the axes (see
+// Decomposition::make_domain); the GPU builds lattice tetrahedra from it too.
+inline constexpr int kCellTetOrders[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
+
 // A box of lattice cells, [lo, hi) along each axis in cell units.
 struct CellBox {
     std::array<std::int64_t, 3> lo{}, hi{};
@@ -81,6 +85,14 @@ public:
 
     // Builds the nodes, field values and tetrahedra of one domain.
     Domain make_domain(int domain, const Field& field) const;
+
+    // The field values alone, as make_domain gives them (node i + px*(j +
+    // py*k) of the box, px and py its nodes per axis): what the GPU needs
+    // of a lattice domain, which builds the rest itself (extract_gpu.hpp).
+    std::vector<float> field_values(int domain, const Field& field) const;
+
+    // Nodes of one domain; throws tetiso::Error when they do not fit int32.
+    std::size_t node_count(int domain) const;
 
 private:
     const Lattice& lattice_;
