@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs, builds and runs the whole test suite (CTest; labels unit,
-# topology, mpi, reference), then runs it again in a second build with
+# topology, mpi, gpu (skipped without a CUDA device), reference), then runs it again in a second build with
 # AddressSanitizer and UndefinedBehaviorSanitizer, where any report fails the
 # test that made it. The optimised build is what users run; the sanitised one
 # catches what does not throw (an out-of-bounds read on a damaged file, a
