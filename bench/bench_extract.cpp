@@ -105,13 +105,15 @@ tetiso::GpuExtractor& gpu_extractor() {
     return gpu;
 }
 
-void bench_gpu(benchmark::State& state, std::int64_t n) {
-    const Problem& p = problem(n);
+// Runs `extract` (one GPU call) per iteration; counters: sizes and the mean
+// seconds of the call's three stages.
+template <class Extract>
+void time_gpu(benchmark::State& state, const tetiso::Domain& domain, const Extract& extract) {
     tetiso::GpuExtractor& gpu = gpu_extractor();
     std::int64_t vertices = 0, triangles = 0;
     tetiso::GpuExtractTimings sum;
     for (auto _ : state) {
-        const tetiso::Piece piece = gpu.extract(p.domain, kLevel);
+        const tetiso::Piece piece = extract(gpu);
         vertices = static_cast<std::int64_t>(piece.vertex_count());
         triangles = static_cast<std::int64_t>(piece.triangle_count());
         benchmark::DoNotOptimize(piece.triangles.data());
@@ -119,11 +121,16 @@ void bench_gpu(benchmark::State& state, std::int64_t n) {
         sum.compute += gpu.last_timings().compute;
         sum.download += gpu.last_timings().download;
     }
-    set_size_counters(state, p.domain, vertices, triangles);
+    set_size_counters(state, domain, vertices, triangles);
     const auto iterations = static_cast<double>(state.iterations());
     state.counters["upload_s"] = sum.upload / iterations;
     state.counters["compute_s"] = sum.compute / iterations;
     state.counters["download_s"] = sum.download / iterations;
+}
+
+void bench_gpu(benchmark::State& state, std::int64_t n) {
+    const Problem& p = problem(n);
+    time_gpu(state, p.domain, [&](tetiso::GpuExtractor& gpu) { return gpu.extract(p.domain, kLevel); });
 }
 
 void bench_gpu_lattice(benchmark::State& state, std::int64_t n) {
@@ -131,23 +138,7 @@ void bench_gpu_lattice(benchmark::State& state, std::int64_t n) {
     const tetiso::Lattice lattice(n);
     const tetiso::Decomposition one(lattice, 1);
     const std::vector<float> values = one.field_values(0, *tetiso::make_field("paper"));
-    tetiso::GpuExtractor& gpu = gpu_extractor();
-    std::int64_t vertices = 0, triangles = 0;
-    tetiso::GpuExtractTimings sum;
-    for (auto _ : state) {
-        const tetiso::Piece piece = gpu.extract(one, 0, values, kLevel);
-        vertices = static_cast<std::int64_t>(piece.vertex_count());
-        triangles = static_cast<std::int64_t>(piece.triangle_count());
-        benchmark::DoNotOptimize(piece.triangles.data());
-        sum.upload += gpu.last_timings().upload;
-        sum.compute += gpu.last_timings().compute;
-        sum.download += gpu.last_timings().download;
-    }
-    set_size_counters(state, p.domain, vertices, triangles);
-    const auto iterations = static_cast<double>(state.iterations());
-    state.counters["upload_s"] = sum.upload / iterations;
-    state.counters["compute_s"] = sum.compute / iterations;
-    state.counters["download_s"] = sum.download / iterations;
+    time_gpu(state, p.domain, [&](tetiso::GpuExtractor& gpu) { return gpu.extract(one, 0, values, kLevel); });
 }
 
 // A domain from nothing to its piece, as a job's domain task makes it.

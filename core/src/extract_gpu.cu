@@ -216,14 +216,20 @@ __global__ void emit_crossings(std::size_t tets, Tets corners, const u8* pattern
     }
 }
 
-__device__ inline bool contains(const u64* sorted, std::size_t n, u64 key) {
+// The first position in sorted[0, n) not below key.
+__device__ inline std::size_t lower_bound(const u64* sorted, std::size_t n, u64 key) {
     std::size_t lo = 0, hi = n;
     while (lo < hi) {
         const std::size_t mid = lo + (hi - lo) / 2;
         if (sorted[mid] < key) lo = mid + 1;
         else hi = mid;
     }
-    return lo < n && sorted[lo] == key;
+    return lo;
+}
+
+__device__ inline bool contains(const u64* sorted, std::size_t n, u64 key) {
+    const std::size_t at = lower_bound(sorted, n, key);
+    return at < n && sorted[at] == key;
 }
 
 struct NodeArrays {
@@ -258,13 +264,7 @@ __global__ void place_vertices(std::size_t count, const u64* edges, NodeArrays n
 }
 
 __device__ inline i32 vertex_of(const u64* edges, std::size_t n, u64 code) {
-    std::size_t lo = 0, hi = n;
-    while (lo < hi) {
-        const std::size_t mid = lo + (hi - lo) / 2;
-        if (edges[mid] < code) lo = mid + 1;
-        else hi = mid;
-    }
-    return static_cast<i32>(lo);
+    return static_cast<i32>(lower_bound(edges, n, code));
 }
 
 // 5. connect: a cut tetrahedron's one or two triangles, in tetrahedron order.

@@ -140,24 +140,6 @@ TEST(Extract, OutputDoesNotDependOnThreadCount) {
     EXPECT_EQ(serial.triangles, parallel.triangles) << "triangle order must not depend on threads either";
 }
 
-// Renumbers a domain's nodes by `order` (new index -> old index).
-Domain renumbered(const Domain& d, const std::vector<std::int32_t>& order) {
-    Domain out = d;
-    std::vector<std::int32_t> rank(order.size());
-    for (std::size_t i = 0; i < order.size(); ++i) {
-        const auto old = static_cast<std::size_t>(order[i]);
-        rank[old] = static_cast<std::int32_t>(i);
-        out.x[i] = d.x[old];
-        out.y[i] = d.y[old];
-        out.z[i] = d.z[old];
-        out.f[i] = d.f[old];
-        out.gid[i] = d.gid[old];
-        out.interface[i] = d.interface[old];
-    }
-    for (auto& v : out.tets) v = rank[static_cast<std::size_t>(v)];
-    return out;
-}
-
 TEST(Extract, UnstructuredNodeOrderGivesTheSameSurface) {
     // A general mesh numbers its nodes in any order; the piece must not care,
     // whether the buckets suffice or overflow into the sorting path.
@@ -170,7 +152,7 @@ TEST(Extract, UnstructuredNodeOrderGivesTheSameSurface) {
     std::iota(order.begin(), order.end(), 0);
     std::mt19937 random(7);
     std::shuffle(order.begin(), order.end(), random);
-    EXPECT_TRUE(test::same_surface(reference, extract(renumbered(domain, order), 0.0f)));
+    EXPECT_TRUE(test::same_surface(reference, extract(test::renumbered(domain, order), 0.0f)));
 
     // A tiny sphere around one node, numbered first: all 14 of its edges
     // cross and go into one bucket of 8.
@@ -182,7 +164,7 @@ TEST(Extract, UnstructuredNodeOrderGivesTheSameSurface) {
     std::iota(order.begin(), order.end(), 0);
     std::swap(order[0], order[static_cast<std::size_t>(centre)]);
     const Piece plain = extract(small, level);
-    const Piece overflowed = extract(renumbered(small, order), level);
+    const Piece overflowed = extract(test::renumbered(small, order), level);
     EXPECT_EQ(plain.vertex_count(), 14u);
     EXPECT_TRUE(test::same_surface(plain, overflowed));
 }

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "test_support.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/extract_gpu.hpp"
@@ -144,28 +145,12 @@ TEST(Gpu, NodesInAnyOrderGiveTheCpuPiece) {
     SKIP_WITHOUT_GPU();
     const Lattice lattice(16);
     const Decomposition one(lattice, 1);
-    const auto renumbered = [](const Domain& d, const std::vector<std::int32_t>& order) {
-        Domain out = d;
-        std::vector<std::int32_t> rank(order.size());
-        for (std::size_t i = 0; i < order.size(); ++i) {
-            const auto old = static_cast<std::size_t>(order[i]);
-            rank[old] = static_cast<std::int32_t>(i);
-            out.x[i] = d.x[old];
-            out.y[i] = d.y[old];
-            out.z[i] = d.z[old];
-            out.f[i] = d.f[old];
-            out.gid[i] = d.gid[old];
-            out.interface[i] = d.interface[old];
-        }
-        for (auto& v : out.tets) v = rank[static_cast<std::size_t>(v)];
-        return out;
-    };
     const Domain gyroid = one.make_domain(0, *make_field("gyroid"));
     std::vector<std::int32_t> order(gyroid.node_count());
     std::iota(order.begin(), order.end(), 0);
     std::mt19937 random(7);
     std::shuffle(order.begin(), order.end(), random);
-    const Domain shuffled = renumbered(gyroid, order);
+    const Domain shuffled = test::renumbered(gyroid, order);
     EXPECT_TRUE(identical(extract(shuffled, 0.0f), gpu().extract(shuffled, 0.0f)));
 
     // A tiny sphere around one node, numbered first: its 14 edges all cross.
@@ -173,7 +158,7 @@ TEST(Gpu, NodesInAnyOrderGiveTheCpuPiece) {
     const auto level = static_cast<float>(0.5 * lattice.spacing());
     std::iota(order.begin(), order.end(), 0);
     std::swap(order[0], order[static_cast<std::size_t>(std::min_element(dot.f.begin(), dot.f.end()) - dot.f.begin())]);
-    const Domain crowded = renumbered(dot, order);
+    const Domain crowded = test::renumbered(dot, order);
     const Piece cpu = extract(crowded, level);
     EXPECT_EQ(cpu.vertex_count(), 14u);
     EXPECT_TRUE(identical(cpu, gpu().extract(crowded, level)));

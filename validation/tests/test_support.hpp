@@ -49,6 +49,24 @@ private:
     std::filesystem::path path_;
 };
 
+// Renumbers a domain's nodes by `order` (new index -> old index).
+inline Domain renumbered(const Domain& d, const std::vector<std::int32_t>& order) {
+    Domain out = d;
+    std::vector<std::int32_t> rank(order.size());
+    for (std::size_t i = 0; i < order.size(); ++i) {
+        const auto old = static_cast<std::size_t>(order[i]);
+        rank[old] = static_cast<std::int32_t>(i);
+        out.x[i] = d.x[old];
+        out.y[i] = d.y[old];
+        out.z[i] = d.z[old];
+        out.f[i] = d.f[old];
+        out.gid[i] = d.gid[old];
+        out.interface[i] = d.interface[old];
+    }
+    for (auto& v : out.tets) v = rank[static_cast<std::size_t>(v)];
+    return out;
+}
+
 // Extracts every domain of an N-lattice split into D domains and merges the
 // pieces by key, as `tetiso extract` does.
 inline Piece lattice_surface(std::int64_t n, int domains, const std::string& field_name,
