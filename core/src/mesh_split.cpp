@@ -15,6 +15,7 @@
 #include <utility>
 
 #include "io_formats.hpp"
+#include "tetiso/detail/write_atomically.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/io.hpp"
 
@@ -160,9 +161,10 @@ void require_new_split_directory(const std::filesystem::path& dir) {
 
 void write_mesh_split(const MeshPartition& partition, double default_level, const std::filesystem::path& dir) {
     require_new_split_directory(dir);
-    std::error_code ec;
-    const std::filesystem::path temporary = detail::temporary_sibling(dir);
-    try {
+    // Written beside the target and renamed into place: a failed split
+    // leaves nothing behind.
+    write_atomically(dir, [&](const std::filesystem::path& temporary) {
+        std::error_code ec;
         if (!std::filesystem::create_directory(temporary, ec) || ec)
             throw Error(dir.string() + ": cannot write: " + (ec ? ec.message() : std::string("cannot create ") + temporary.string()));
         const int domains = partition.domain_count();
@@ -223,13 +225,7 @@ void write_mesh_split(const MeshPartition& partition, double default_level, cons
         index.put_array(domain_digests);
         index.put_array(edge_digests);
         index.write(split_index_file(temporary));
-        std::filesystem::rename(temporary, dir, ec);
-        if (ec) throw Error(dir.string() + ": cannot write: " + ec.message());
-    } catch (...) {
-        std::error_code ignored;
-        std::filesystem::remove_all(temporary, ignored);
-        throw;
-    }
+    });
 }
 
 SplitMeshPartition::SplitMeshPartition(std::filesystem::path dir) : dir_(std::move(dir)) {

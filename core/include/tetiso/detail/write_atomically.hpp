@@ -25,7 +25,7 @@ void write_atomically(const std::filesystem::path& path, WriteFunction&& write) 
         if (ec) throw Error(path.string() + ": cannot write: " + ec.message());
     } catch (...) {
         std::error_code ignored;
-        std::filesystem::remove(temporary, ignored);
+        std::filesystem::remove_all(temporary, ignored); // a file, or a directory `write` filled
         throw;
     }
 }
