@@ -4,6 +4,7 @@
 #include "tetiso/lattice.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 #include <string>
 
 #include "tetiso/error.hpp"
@@ -13,10 +14,13 @@ namespace {
 
 // Splits `box` (holding `count` domains) recursively and appends the leaves
 // in depth-first order, so domain ids follow space and do not depend on
-// anything but N and D. Returns the index of the tree node made for `box`.
-int bisect(const CellBox& box, int count, std::vector<CellBox>& leaves, std::vector<DomainTreeNode>& tree) {
+// anything but N and D. Returns the index of the tree node made for `box`,
+// whose box goes to tree_boxes[node].
+int bisect(const CellBox& box, int count, std::vector<CellBox>& leaves, std::vector<DomainTreeNode>& tree,
+           std::vector<CellBox>& tree_boxes) {
     const int node = static_cast<int>(tree.size());
     tree.push_back(DomainTreeNode{static_cast<int>(leaves.size()), count, -1, -1});
+    tree_boxes.push_back(box);
     if (count == 1) {
         leaves.push_back(box);
         return node;
@@ -41,8 +45,8 @@ int bisect(const CellBox& box, int count, std::vector<CellBox>& leaves, std::vec
     CellBox left = box, right = box;
     left.hi[axis] = box.lo[axis] + left_length;
     right.lo[axis] = left.hi[axis];
-    const int left_node = bisect(left, left_count, leaves, tree);
-    const int right_node = bisect(right, count - left_count, leaves, tree);
+    const int left_node = bisect(left, left_count, leaves, tree, tree_boxes);
+    const int right_node = bisect(right, count - left_count, leaves, tree, tree_boxes);
     tree[static_cast<std::size_t>(node)].left = left_node;
     tree[static_cast<std::size_t>(node)].right = right_node;
     return node;
@@ -75,7 +79,7 @@ Decomposition::Decomposition(const Lattice& lattice, int d) : lattice_(lattice) 
         throw Error("cannot split " + std::to_string(lattice.cell_count()) + " cells into " +
                     std::to_string(d) + " domains");
     const std::int64_t cells = lattice.n() - 1;
-    bisect(CellBox{{0, 0, 0}, {cells, cells, cells}}, d, boxes_, tree_);
+    bisect(CellBox{{0, 0, 0}, {cells, cells, cells}}, d, boxes_, tree_, tree_boxes_);
 
     neighbours_.resize(boxes_.size());
     for (std::size_t a = 0; a < boxes_.size(); ++a)
@@ -89,14 +93,38 @@ Decomposition::Decomposition(const Lattice& lattice, int d) : lattice_(lattice) 
 
 std::vector<int> Decomposition::domains_of_edge(GlobalId a, GlobalId b) const {
     const auto ia = lattice_.node_index(a), ib = lattice_.node_index(b);
+    std::array<std::int64_t, 3> lo{}, hi{};
+    for (int axis = 0; axis < 3; ++axis) {
+        lo[axis] = std::min(ia[axis], ib[axis]);
+        hi[axis] = std::max(ia[axis], ib[axis]);
+    }
+    auto holds = [&](int node) {
+        const CellBox& box = tree_boxes_[static_cast<std::size_t>(node)];
+        for (int axis = 0; axis < 3; ++axis)
+            if (lo[axis] < box.lo[axis] || hi[axis] > box.hi[axis]) return false;
+        return true;
+    };
+    // A box holds the edge only if its parent does, and the children of a
+    // node tile it, so the descent reaches every holder and only them; an
+    // edge lies in more than one child only on a cut. Left before right
+    // gives the leaves, and so the domains, in ascending order.
+    // The pending nodes are disjoint subtrees, each with a holder among its
+    // leaves, and a lattice edge has at most four holders (the boxes around
+    // an axis-parallel segment), so the stack never comes near its size.
     std::vector<int> result;
-    // Boxes are few (~10^3) and this runs for interface vertices only.
-    for (std::size_t d = 0; d < boxes_.size(); ++d) {
-        const CellBox& box = boxes_[d];
-        bool inside = true;
-        for (int axis = 0; axis < 3 && inside; ++axis)
-            inside = std::min(ia[axis], ib[axis]) >= box.lo[axis] && std::max(ia[axis], ib[axis]) <= box.hi[axis];
-        if (inside) result.push_back(static_cast<int>(d));
+    if (!holds(0)) return result;
+    std::array<int, 64> pending{};
+    std::size_t top = 0;
+    pending[top++] = 0;
+    while (top > 0) {
+        const DomainTreeNode& node = tree_[static_cast<std::size_t>(pending[--top])];
+        if (node.left < 0) {
+            result.push_back(node.first);
+            continue;
+        }
+        if (top + 2 > pending.size()) throw std::logic_error("Decomposition::domains_of_edge: tree descent overflow");
+        if (holds(node.right)) pending[top++] = node.right;
+        if (holds(node.left)) pending[top++] = node.left;
     }
     return result;
 }

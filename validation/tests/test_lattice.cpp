@@ -163,5 +163,45 @@ TEST(Decomposition, DomainsOfEdgeFindEveryHolder) {
     EXPECT_EQ(decomposition.domains_of_edge(centre, lattice.node_id(5, 5, 5)).size(), 1u); // inside a box
 }
 
+// The tree descent against the definition, box by box, for every edge of
+// the Freudenthal split (the axes, the face diagonals and the body
+// diagonal, each from its lower node) on uneven bisections, where cuts
+// leave T-junctions and boxes of different sizes meet.
+TEST(Decomposition, DomainsOfEdgeAgreeWithEveryBox) {
+    const Lattice lattice(12);
+    const std::int64_t n = lattice.n();
+    const std::array<std::int64_t, 3> steps[] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0},
+                                                 {0, 1, 1}, {1, 0, 1}, {1, 1, 1}};
+    for (const int d : {1, 2, 7, 27, 50, 131}) {
+        const Decomposition decomposition(lattice, d);
+        std::size_t edges = 0, shared = 0;
+        for (std::int64_t k = 0; k < n; ++k)
+            for (std::int64_t j = 0; j < n; ++j)
+                for (std::int64_t i = 0; i < n; ++i)
+                    for (const auto& step : steps) {
+                        const std::int64_t i2 = i + step[0], j2 = j + step[1], k2 = k + step[2];
+                        if (i2 >= n || j2 >= n || k2 >= n) continue;
+                        std::vector<int> expected;
+                        for (int b = 0; b < d; ++b) {
+                            const CellBox& box = decomposition.box(b);
+                            if (i >= box.lo[0] && i2 <= box.hi[0] && j >= box.lo[1] && j2 <= box.hi[1] &&
+                                k >= box.lo[2] && k2 <= box.hi[2])
+                                expected.push_back(b);
+                        }
+                        ASSERT_FALSE(expected.empty());
+                        ASSERT_EQ(decomposition.domains_of_edge(lattice.node_id(i, j, k), lattice.node_id(i2, j2, k2)),
+                                  expected)
+                            << d << " domains, edge (" << i << "," << j << "," << k << ")-(" << i2 << "," << j2
+                            << "," << k2 << ")";
+                        ++edges;
+                        shared += expected.size() > 1;
+                    }
+        if (d > 1) {
+            EXPECT_GT(shared, 0u) << d << " domains: no edge on an interface was tried";
+        }
+        EXPECT_GT(edges, 0u);
+    }
+}
+
 } // namespace
 } // namespace tetiso

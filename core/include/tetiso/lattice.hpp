@@ -80,7 +80,10 @@ public:
     // cut and their union is convex.
     const std::vector<DomainTreeNode>& tree() const { return tree_; }
 
-    // Domains whose closed box contains the mesh edge between two nodes, sorted.
+    // Domains whose closed box contains the mesh edge between two nodes,
+    // sorted. A descent of the bisection tree: O(depth) for an edge inside
+    // one domain, so a job's seams ask it of every locked vertex at any
+    // domain count.
     std::vector<int> domains_of_edge(GlobalId a, GlobalId b) const;
 
     // Builds the nodes, field values and tetrahedra of one domain.
@@ -98,6 +101,7 @@ private:
     const Lattice& lattice_;
     std::vector<CellBox> boxes_;
     std::vector<DomainTreeNode> tree_;
+    std::vector<CellBox> tree_boxes_; // the box of each tree node
     std::vector<std::vector<int>> neighbours_;
 };
 
