@@ -655,14 +655,36 @@ void build_edges(const Fans& fans, int threads, Edges& edges, std::vector<i32>& 
 // the geometry, the bounds and the sample offsets cost three (those loads
 // were the hot spots of the tests' profile).
 
+// Whether the normal of triangle (a, b, c), of quality q, is the surface's
+// rather than rounding's. Corners are floats: a face whose height over its
+// longest side is within a few units in the last place of its coordinates
+// has a normal that rounding chose, whatever its quality (a needle one ulp
+// wide and a hundred long has q = 0.01). Marching tetrahedra make such faces
+// where the surface passes within float resolution of a mesh node: the
+// corners near the node then differ in one coordinate alone, by a few ulps,
+// and lie on a line. Judging their collapses by those normals refused every
+// way out of such a cluster, which stayed in the output as zero-area
+// triangles (6 of them in the N = 1000 paper job). Below kValidQuality the
+// normal is rounding's at any size.
+constexpr double kValidQuality = 1e-5;
+constexpr double kRoundingUlps = 4.0;
+
+inline bool resolved(Vec a, Vec b, Vec c, double q) {
+    if (!(q > kValidQuality)) return false;
+    const double longest2 = std::max(norm2(b - a), std::max(norm2(c - b), norm2(a - c)));
+    const double height = norm(cross(b - a, c - a)) / std::sqrt(longest2);
+    const double extent = std::max({std::fabs(a.x), std::fabs(a.y), std::fabs(a.z), std::fabs(b.x), std::fabs(b.y),
+                                    std::fabs(b.z), std::fabs(c.x), std::fabs(c.y), std::fabs(c.z)});
+    return height > kRoundingUlps * std::numeric_limits<float>::epsilon() * extent;
+}
+
 struct FaceGeometry {
     float nx, ny, nz, q;
     float err;
     i32 samples_begin, samples_end; // samples [begin, end): Samples::point_of
-    i32 unused;
+    i32 is_resolved;                // resolved(): the normal means something
     Vec n() const { return {nx, ny, nz}; }
-    // Below this quality a float normal is dominated by rounding.
-    bool valid() const { return q > 1e-5f; }
+    bool valid() const { return is_resolved != 0; }
 };
 static_assert(sizeof(FaceGeometry) == 32);
 
@@ -672,9 +694,10 @@ void build_geometry(const Surface& s, int threads, std::vector<FaceGeometry>& ge
     parallel_for(threads, nt, [&](i64 ti) {
         const auto t = static_cast<std::size_t>(ti);
         Vec n;
-        const double q = quality(s.pos(s.tri[3 * t]), s.pos(s.tri[3 * t + 1]), s.pos(s.tri[3 * t + 2]), &n);
+        const Vec a = s.pos(s.tri[3 * t]), b = s.pos(s.tri[3 * t + 1]), c = s.pos(s.tri[3 * t + 2]);
+        const double q = quality(a, b, c, &n);
         geometry[t] = {static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z), static_cast<float>(q),
-                       s.err[t], 0, 0, 0};
+                       s.err[t], 0, 0, resolved(a, b, c, q) ? 1 : 0};
     });
 }
 
@@ -1328,10 +1351,13 @@ private:
             Vec n;
             const double q_new = quality(p, a, b, &n);
             const FaceGeometry& g = geo(face(slot));
-            // No face of non-zero area becomes degenerate (one that already
-            // is may stay so: its own short edge will remove it).
-            spoiled = q_new < q_floor || (!(q_new > 0) && g.q > 0) ||
-                      (q_new > 0 && (g.valid() ? dot(n, g.n()) < p_.cos_turn : dot(n, nsum) < 0));
+            // No face with a normal of its own (valid) becomes degenerate or
+            // turns; one whose normal is rounding's may become degenerate,
+            // its own short edge will remove it, and must face the leaves'
+            // way only once the collapse gives it a normal of its own.
+            spoiled = q_new < q_floor || (!(q_new > 0) && g.valid()) ||
+                      (g.valid() ? q_new > 0 && dot(n, g.n()) < p_.cos_turn
+                                 : resolved(p, a, b, q_new) && dot(n, nsum) < 0);
             if (faces < NewFan::kMax) {
                 fan.a[faces] = a;
                 fan.b[faces] = b;
