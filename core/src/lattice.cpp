@@ -65,6 +65,24 @@ bool share_edges(const CellBox& a, const CellBox& b) {
     return positive >= 1;
 }
 
+// The field at the box's nodes, node i + px*(j + py*k) (px, py: nodes per
+// axis).
+std::vector<float> box_field_values(const Lattice& lattice, const CellBox& box, const Field& field) {
+    if (box.nodes() > INT32_MAX)
+        throw Error("a box of " + std::to_string(box.nodes()) + " lattice nodes is too large for 32-bit local indices");
+    std::vector<float> f(static_cast<std::size_t>(box.nodes()));
+    const std::int64_t px = box.hi[0] - box.lo[0] + 1, py = box.hi[1] - box.lo[1] + 1, pz = box.hi[2] - box.lo[2] + 1;
+    std::vector<double> xs(static_cast<std::size_t>(px)), ys(xs.size()), zs(xs.size());
+    for (std::int64_t i = 0; i < px; ++i) xs[static_cast<std::size_t>(i)] = lattice.coordinate(box.lo[0] + i);
+    for (std::int64_t k = 0; k < pz; ++k)
+        for (std::int64_t j = 0; j < py; ++j) {
+            std::fill(ys.begin(), ys.end(), lattice.coordinate(box.lo[1] + j));
+            std::fill(zs.begin(), zs.end(), lattice.coordinate(box.lo[2] + k));
+            field.evaluate(xs.data(), ys.data(), zs.data(), xs.size(), f.data() + px * (j + py * k));
+        }
+    return f;
+}
+
 } // namespace
 
 Lattice::Lattice(std::int64_t n) : n_(n) {
@@ -136,42 +154,40 @@ std::size_t Decomposition::node_count(int domain) const {
     return static_cast<std::size_t>(nodes);
 }
 
-std::vector<float> Decomposition::field_values(int domain, const Field& field) const {
+std::uint8_t Decomposition::open_faces(int domain) const {
     const CellBox& box = boxes_.at(static_cast<std::size_t>(domain));
-    std::vector<float> f(node_count(domain));
-    const std::int64_t px = box.hi[0] - box.lo[0] + 1, py = box.hi[1] - box.lo[1] + 1, pz = box.hi[2] - box.lo[2] + 1;
-    std::vector<double> xs(static_cast<std::size_t>(px)), ys(xs.size()), zs(xs.size());
-    for (std::int64_t i = 0; i < px; ++i) xs[static_cast<std::size_t>(i)] = lattice_.coordinate(box.lo[0] + i);
-    for (std::int64_t k = 0; k < pz; ++k)
-        for (std::int64_t j = 0; j < py; ++j) {
-            std::fill(ys.begin(), ys.end(), lattice_.coordinate(box.lo[1] + j));
-            std::fill(zs.begin(), zs.end(), lattice_.coordinate(box.lo[2] + k));
-            field.evaluate(xs.data(), ys.data(), zs.data(), xs.size(), f.data() + px * (j + py * k));
-        }
-    return f;
+    const std::int64_t last = lattice_.n() - 1;
+    return static_cast<std::uint8_t>((box.lo[0] > 0 ? 1u : 0u) | (box.hi[0] < last ? 2u : 0u) |
+                                     (box.lo[1] > 0 ? 4u : 0u) | (box.hi[1] < last ? 8u : 0u) |
+                                     (box.lo[2] > 0 ? 16u : 0u) | (box.hi[2] < last ? 32u : 0u));
+}
+
+// Both call node_count first: it refuses a domain too large for 32-bit
+// indices by its number, where the box's own check could not name it.
+std::vector<float> Decomposition::field_values(int domain, const Field& field) const {
+    node_count(domain);
+    return box_field_values(lattice_, boxes_[static_cast<std::size_t>(domain)], field);
 }
 
 Domain Decomposition::make_domain(int domain, const Field& field) const {
-    const CellBox& box = boxes_.at(static_cast<std::size_t>(domain));
-    const std::int64_t n = lattice_.n();
+    node_count(domain);
+    Domain out = make_box_domain(lattice_, boxes_[static_cast<std::size_t>(domain)], field, open_faces(domain));
+    out.id = domain;
+    return out;
+}
+
+Domain make_box_domain(const Lattice& lattice, const CellBox& box, const Field& field, std::uint8_t open_faces) {
     const std::int64_t nx = box.hi[0] - box.lo[0], ny = box.hi[1] - box.lo[1], nz = box.hi[2] - box.lo[2];
     const std::int64_t px = nx + 1, py = ny + 1, pz = nz + 1; // nodes per axis
-    const std::size_t nodes = node_count(domain);
 
     Domain out;
-    out.id = domain;
+    out.f = box_field_values(lattice, box, field);
+    const std::size_t nodes = out.f.size();
     out.x.resize(nodes);
     out.y.resize(nodes);
     out.z.resize(nodes);
-    out.f = field_values(domain, field);
     out.gid.resize(nodes);
     out.interface.resize(nodes);
-
-    // Interface faces of the box: those not on the outer boundary of the cube.
-    const std::uint8_t open_faces = static_cast<std::uint8_t>(
-        (box.lo[0] > 0 ? 1u : 0u) | (box.hi[0] < n - 1 ? 2u : 0u) | (box.lo[1] > 0 ? 4u : 0u) |
-        (box.hi[1] < n - 1 ? 8u : 0u) | (box.lo[2] > 0 ? 16u : 0u) | (box.hi[2] < n - 1 ? 32u : 0u));
-
     for (std::int64_t k = 0; k < pz; ++k) {
         for (std::int64_t j = 0; j < py; ++j) {
             const std::size_t first = static_cast<std::size_t>(px * (j + py * k));
@@ -179,10 +195,10 @@ Domain Decomposition::make_domain(int domain, const Field& field) const {
             for (std::int64_t i = 0; i < px; ++i) {
                 const std::int64_t gi = box.lo[0] + i;
                 const std::size_t v = first + static_cast<std::size_t>(i);
-                out.x[v] = static_cast<float>(lattice_.coordinate(gi));
-                out.y[v] = static_cast<float>(lattice_.coordinate(gj));
-                out.z[v] = static_cast<float>(lattice_.coordinate(gk));
-                out.gid[v] = lattice_.node_id(gi, gj, gk);
+                out.x[v] = static_cast<float>(lattice.coordinate(gi));
+                out.y[v] = static_cast<float>(lattice.coordinate(gj));
+                out.z[v] = static_cast<float>(lattice.coordinate(gk));
+                out.gid[v] = lattice.node_id(gi, gj, gk);
                 const unsigned faces = (i == 0 ? 1u : 0u) | (i == nx ? 2u : 0u) | (j == 0 ? 4u : 0u) |
                                        (j == ny ? 8u : 0u) | (k == 0 ? 16u : 0u) | (k == nz ? 32u : 0u);
                 out.interface[v] = static_cast<std::uint8_t>(faces & open_faces);

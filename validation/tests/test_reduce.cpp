@@ -658,42 +658,6 @@ TEST(Reduce, SurfaceThroughMeshNodesIsCleanedUp) {
     EXPECT_LE(hausdorff(in, out).symmetric, 0.5 * Lattice(n).spacing());
 }
 
-// A box of `cells` lattice cells from node `lo` of the N = 1000 lattice,
-// built as Decomposition::make_domain builds a domain, with no interfaces:
-// what a 1000-domain job's domain holds around that node, at 10^-6 the cost.
-Domain lattice_box(const Lattice& lattice, const Field& field, std::array<std::int64_t, 3> lo, std::int64_t cells) {
-    const std::int64_t p = cells + 1;
-    Domain d;
-    for (std::int64_t k = 0; k < p; ++k)
-        for (std::int64_t j = 0; j < p; ++j)
-            for (std::int64_t i = 0; i < p; ++i) {
-                const double x = lattice.coordinate(lo[0] + i), y = lattice.coordinate(lo[1] + j),
-                             z = lattice.coordinate(lo[2] + k);
-                float f = 0;
-                field.evaluate(&x, &y, &z, 1, &f);
-                d.x.push_back(static_cast<float>(x));
-                d.y.push_back(static_cast<float>(y));
-                d.z.push_back(static_cast<float>(z));
-                d.f.push_back(f);
-                d.gid.push_back(lattice.node_id(lo[0] + i, lo[1] + j, lo[2] + k));
-                d.interface.push_back(0);
-            }
-    const std::int64_t stride[3] = {1, p, p * p};
-    for (std::int64_t k = 0; k < cells; ++k)
-        for (std::int64_t j = 0; j < cells; ++j)
-            for (std::int64_t i = 0; i < cells; ++i) {
-                const std::int64_t origin = i + p * (j + p * k);
-                for (int t = 0; t < 6; ++t) {
-                    const std::int64_t v1 = origin + stride[kCellTetOrders[t][0]];
-                    const std::int64_t v2 = v1 + stride[kCellTetOrders[t][1]];
-                    const bool odd = t >= 3; // odd orderings walk negatively
-                    for (const std::int64_t v : {origin, odd ? v2 : v1, odd ? v1 : v2, origin + stride[0] + stride[1] + stride[2]})
-                        d.tets.push_back(static_cast<std::int32_t>(v));
-                }
-            }
-    return d;
-}
-
 std::int64_t zero_area_triangles(const Piece& p) { return check_topology(p).zero_area_triangles; }
 
 TEST(Reduce, ClustersWithinFloatResolutionOfAMeshNodeAreCleanedUp) {
@@ -710,8 +674,10 @@ TEST(Reduce, ClustersWithinFloatResolutionOfAMeshNodeAreCleanedUp) {
     o.max_error = 0.25 * lattice.spacing(); // as the job sets it
     for (const auto& node : {std::array<std::int64_t, 3>{457, 159, 843}, std::array<std::int64_t, 3>{774, 309, 186}}) {
         const std::int64_t half = 6;
-        const Piece in = extract(lattice_box(lattice, *field, {node[0] - half, node[1] - half, node[2] - half}, 2 * half),
-                                 static_cast<float>(field->default_level()));
+        // What a 1000-domain job's domain holds around the node, without
+        // interfaces: 12^3 cells rather than 10^6.
+        const CellBox box{{node[0] - half, node[1] - half, node[2] - half}, {node[0] + half, node[1] + half, node[2] + half}};
+        const Piece in = extract(make_box_domain(lattice, box, *field, 0), static_cast<float>(field->default_level()));
         SCOPED_TRACE("around node " + std::to_string(node[0]) + "," + std::to_string(node[1]) + "," + std::to_string(node[2]));
         ASSERT_GT(zero_area_triangles(in), 0) << "the surface no longer passes that close to the node";
         const Piece out = reduce(in, o);

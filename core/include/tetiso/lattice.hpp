@@ -97,6 +97,10 @@ public:
     // Nodes of one domain; throws tetiso::Error when they do not fit int32.
     std::size_t node_count(int domain) const;
 
+    // The faces of a domain's box that are interfaces, not on the cube's
+    // surface: bit s for face s (-x, +x, -y, +y, -z, +z).
+    std::uint8_t open_faces(int domain) const;
+
 private:
     const Lattice& lattice_;
     std::vector<CellBox> boxes_;
@@ -104,6 +108,16 @@ private:
     std::vector<CellBox> tree_boxes_; // the box of each tree node
     std::vector<std::vector<int>> neighbours_;
 };
+
+// The nodes, field values and tetrahedra of the lattice cells in `box`:
+// node i + px*(j + py*k) of the box (px, py its nodes per axis), six
+// positively oriented tetrahedra per cell, cells x fastest. A node's
+// interface mask has bit s where it lies on face s of the box and bit s of
+// open_faces is set (faces -x, +x, -y, +y, -z, +z). Decomposition's
+// make_domain is this for a domain's box; any other box gives what a domain
+// holds there, bit for bit (tests rebuild one spot of a 10^9-node lattice
+// this way). Throws tetiso::Error when the box's nodes do not fit int32.
+Domain make_box_domain(const Lattice& lattice, const CellBox& box, const Field& field, std::uint8_t open_faces);
 
 // The lattice test problem as the job's Partition: the lattice, its
 // bisection into `domains` boxes and the field, each domain generated on
