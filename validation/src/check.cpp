@@ -31,6 +31,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <numbers>
 #include <numeric>
@@ -237,6 +238,21 @@ std::int64_t count_duplicate_positions(const Piece& mesh) {
     return duplicates;
 }
 
+// Records a problem spot unless `spots` holds kMaxProblemSpots already.
+void note_spot(std::vector<ProblemSpot>& spots, const Piece& mesh, std::int64_t triangle,
+               std::initializer_list<std::int32_t> vertices) {
+    if (spots.size() >= kMaxProblemSpots) return;
+    ProblemSpot& spot = spots.emplace_back();
+    spot.triangle = triangle;
+    spot.vertices.assign(vertices);
+    for (const std::int32_t v : vertices) {
+        spot.at[0] += mesh.x[static_cast<std::size_t>(v)];
+        spot.at[1] += mesh.y[static_cast<std::size_t>(v)];
+        spot.at[2] += mesh.z[static_cast<std::size_t>(v)];
+    }
+    for (double& c : spot.at) c /= static_cast<double>(vertices.size());
+}
+
 } // namespace
 
 void validate_indexed_mesh(const Piece& mesh, std::string_view what) {
@@ -368,11 +384,15 @@ TopologyReport check_topology(const Piece& mesh, const CheckOptions& options) {
                 boundary.push_back(h0);
                 ++c.boundary_edges;
             } else {
-                if (m >= 3) ++c.non_manifold_edges;
+                if (m >= 3) {
+                    ++c.non_manifold_edges;
+                    note_spot(r.where.non_manifold_edges, mesh, -1, {lo, hi});
+                }
                 if (m == 2) {
                     const std::uint32_t h1 = static_cast<std::uint32_t>(run[1]);
                     const bool same_way = tri[h0] == tri[h1];
                     c.misoriented_edges += same_way;
+                    if (same_way) note_spot(r.where.misoriented_edges, mesh, -1, {lo, hi});
                     if (!orientation.unite(h0 / 3, h1 / 3, same_way ? 1u : 0u))
                         contradiction[component[lo]] = 1;
                 }
@@ -406,7 +426,10 @@ TopologyReport check_topology(const Piece& mesh, const CheckOptions& options) {
         if (kept[k / 3] && find_root(corner_parent, static_cast<std::int32_t>(k)) == static_cast<std::int32_t>(k))
             ++fans[tri[k]];
     for (std::size_t v = 0; v < nv; ++v)
-        if (fans[v] > 1) ++pc[component[v]].non_manifold_vertices;
+        if (fans[v] > 1) {
+            ++pc[component[v]].non_manifold_vertices;
+            note_spot(r.where.non_manifold_vertices, mesh, -1, {static_cast<std::int32_t>(v)});
+        }
 
     // 4. Boundary loops.
     std::vector<std::int64_t> loops(pc.size(), 0);
@@ -442,6 +465,9 @@ TopologyReport check_topology(const Piece& mesh, const CheckOptions& options) {
     measured.reserve(nt);
     double sum = 0.0; // serial, in triangle order: reproducible
     for (std::size_t t = 0; t < nt; ++t) {
+        if (!kept[t] || angle[t] < 0.0f)
+            note_spot(r.where.degenerate_triangles, mesh, static_cast<std::int64_t>(t),
+                      {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]});
         if (!kept[t]) continue;
         if (angle[t] < 0.0f) {
             ++r.zero_area_triangles;
@@ -502,6 +528,19 @@ nlohmann::json to_json(const TopologyReport& r) {
                             {"below_1", r.min_angle.below_1},
                             {"below_5", r.min_angle.below_5},
                             {"below_10", r.min_angle.below_10}};
+    auto spots = [](const std::vector<ProblemSpot>& list) {
+        json out = json::array();
+        for (const ProblemSpot& spot : list) {
+            json item = {{"vertices", spot.vertices}, {"at", spot.at}};
+            if (spot.triangle >= 0) item["triangle"] = spot.triangle;
+            out.push_back(std::move(item));
+        }
+        return out;
+    };
+    const json where = {{"degenerate_triangles", spots(r.where.degenerate_triangles)},
+                        {"non_manifold_edges", spots(r.where.non_manifold_edges)},
+                        {"non_manifold_vertices", spots(r.where.non_manifold_vertices)},
+                        {"misoriented_edges", spots(r.where.misoriented_edges)}};
     return {{"vertices", r.vertices},
             {"triangles", r.triangles},
             {"referenced_vertices", r.referenced_vertices},
@@ -526,6 +565,7 @@ nlohmann::json to_json(const TopologyReport& r) {
             {"oriented", r.oriented},
             {"min_angle_deg", min_angle},
             {"signatures", signatures},
+            {"where", where},
             {"per_component", components}};
 }
 

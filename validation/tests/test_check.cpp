@@ -146,6 +146,16 @@ TEST(CheckTopology, FlippedTriangleMisorientsItsThreeEdges) {
     EXPECT_EQ(r.euler, 2);
     EXPECT_EQ(r.per_component[0].genus, 0);
     EXPECT_FALSE(r.per_component[0].oriented);
+    // Where: the flipped face's three edges, by smaller then larger end.
+    const std::array<std::int32_t, 3> f = {m.triangles[9], m.triangles[10], m.triangles[11]};
+    std::vector<std::vector<std::int32_t>> expected;
+    for (int i = 0; i < 3; ++i)
+        expected.push_back({std::min(f[i], f[(i + 1) % 3]), std::max(f[i], f[(i + 1) % 3])});
+    std::sort(expected.begin(), expected.end());
+    ASSERT_EQ(r.where.misoriented_edges.size(), 3u);
+    for (int i = 0; i < 3; ++i) EXPECT_EQ(r.where.misoriented_edges[i].vertices, expected[i]);
+    EXPECT_TRUE(r.where.non_manifold_edges.empty());
+    EXPECT_TRUE(r.where.degenerate_triangles.empty());
 }
 
 TEST(CheckTopology, TorusHasGenusOne) {
@@ -217,6 +227,9 @@ TEST(CheckTopology, BowTieHasOneNonManifoldVertex) {
     EXPECT_EQ(r.boundary_edges, 6);
     EXPECT_EQ(r.boundary_loops, 2); // one per triangle, not a figure eight
     EXPECT_EQ(r.euler, 5 - 6 + 2);
+    ASSERT_EQ(r.where.non_manifold_vertices.size(), 1u);
+    EXPECT_EQ(r.where.non_manifold_vertices[0].vertices, std::vector<std::int32_t>{0});
+    EXPECT_EQ(r.where.non_manifold_vertices[0].at, (std::array<double, 3>{0, 0, 0}));
 }
 
 TEST(CheckTopology, LoopsTouchingAtARimVertexStaySeparate) {
@@ -246,6 +259,10 @@ TEST(CheckTopology, ThreeTrianglesOnOneEdge) {
     // The edge's ends are one fan each (joined across the edge): flagged
     // through the edge, not as non-manifold vertices.
     EXPECT_EQ(r.non_manifold_vertices, 0);
+    ASSERT_EQ(r.where.non_manifold_edges.size(), 1u);
+    EXPECT_EQ(r.where.non_manifold_edges[0].vertices, (std::vector<std::int32_t>{0, 1}));
+    EXPECT_EQ(r.where.non_manifold_edges[0].at, (std::array<double, 3>{0.5, 0, 0})); // its midpoint
+    EXPECT_TRUE(r.where.non_manifold_vertices.empty());
 }
 
 TEST(CheckTopology, MobiusStripIsNonOrientableWithOneBoundaryLoop) {
@@ -320,10 +337,35 @@ TEST(CheckTopology, DegenerateTriangles) {
     EXPECT_EQ(r.referenced_vertices, 5); // vertex 5 is used by nobody
     // The collapsed triangle adds no edge: edges are 01 13 30 12 20 24 40.
     EXPECT_EQ(r.edges, 7);
+    // Where: the collapsed and the collinear triangle, in triangle order,
+    // each at its corners' centroid; the sliver is near-degenerate only.
+    ASSERT_EQ(r.where.degenerate_triangles.size(), 2u);
+    EXPECT_EQ(r.where.degenerate_triangles[0].triangle, 1);
+    EXPECT_EQ(r.where.degenerate_triangles[0].vertices, (std::vector<std::int32_t>{0, 0, 1}));
+    EXPECT_EQ(r.where.degenerate_triangles[1].triangle, 2);
+    EXPECT_EQ(r.where.degenerate_triangles[1].vertices, (std::vector<std::int32_t>{0, 1, 2}));
+    EXPECT_NEAR(r.where.degenerate_triangles[1].at[0], 1.0, 1e-12);
+    EXPECT_EQ(r.where.degenerate_triangles[1].at[1], 0.0);
 
     tetiso::CheckOptions strict;
     strict.near_degenerate_angle_deg = 50.0;
     EXPECT_EQ(tetiso::check_topology(m, strict).near_degenerate_triangles, 2);
+}
+
+TEST(CheckTopology, ProblemSpotsStopAtTheLimitAndKeepTheFirst) {
+    // 20 collinear triangles along the x axis: all of zero area; the report
+    // counts all and locates the first kMaxProblemSpots, in triangle order.
+    std::vector<std::array<float, 3>> points;
+    std::vector<std::array<int, 3>> triangles;
+    for (int i = 0; i < 22; ++i) points.push_back({static_cast<float>(i), 0, 0});
+    for (int i = 0; i < 20; ++i) triangles.push_back({i, i + 1, i + 2});
+    const tetiso::TopologyReport r = tetiso::check_topology(make_mesh(points, triangles));
+    EXPECT_EQ(r.zero_area_triangles, 20);
+    ASSERT_EQ(r.where.degenerate_triangles.size(), tetiso::kMaxProblemSpots);
+    for (std::size_t k = 0; k < tetiso::kMaxProblemSpots; ++k) {
+        EXPECT_EQ(r.where.degenerate_triangles[k].triangle, static_cast<std::int64_t>(k));
+        EXPECT_EQ(r.where.degenerate_triangles[k].at[0], static_cast<double>(k) + 1.0);
+    }
 }
 
 TEST(CheckTopology, DuplicatePositionsAreBitIdentical) {
@@ -401,6 +443,16 @@ TEST(CheckTopology, JsonCarriesTheReport) {
     EXPECT_EQ(j["signatures"][1]["genus"], 1);
     EXPECT_EQ(j["closed"], true);
     EXPECT_TRUE(j["min_angle_deg"]["mean"].is_number());
+    EXPECT_TRUE(j["where"]["degenerate_triangles"].empty());
+    EXPECT_TRUE(j["where"]["non_manifold_edges"].empty());
+
+    // A bow tie: its pinched vertex, where it is.
+    const nlohmann::json bow = tetiso::to_json(
+        tetiso::check_topology(make_mesh({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}}, {{0, 1, 2}, {0, 3, 4}})));
+    ASSERT_EQ(bow["where"]["non_manifold_vertices"].size(), 1u);
+    EXPECT_EQ(bow["where"]["non_manifold_vertices"][0]["vertices"], nlohmann::json::array({0}));
+    EXPECT_EQ(bow["where"]["non_manifold_vertices"][0]["at"], nlohmann::json::array({0.0, 0.0, 0.0}));
+    EXPECT_FALSE(bow["where"]["non_manifold_vertices"][0].contains("triangle"));
 }
 
 // ---------------------------------------------------------------- Hausdorff

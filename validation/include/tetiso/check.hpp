@@ -93,6 +93,27 @@ struct CheckOptions {
     double near_degenerate_angle_deg = 1.0;
 };
 
+// Where a problem is, so that a user can find it: the mesh's own indices
+// and a point to look at. `vertices` holds the triangle's three corners, an
+// edge's two ends (smaller first) or the one vertex; `at` is their centroid.
+struct ProblemSpot {
+    std::int64_t triangle = -1; // for a degenerate triangle, else -1
+    std::vector<std::int32_t> vertices;
+    std::array<double, 3> at{};
+};
+
+// The first problems of each kind, in the order of the mesh's indices
+// (triangles for degenerate ones, then edges by their smaller and larger end,
+// vertices by index), at most kMaxProblemSpots each: the counts in
+// TopologyReport say how many there are in all.
+inline constexpr std::size_t kMaxProblemSpots = 8;
+struct ProblemSpots {
+    std::vector<ProblemSpot> degenerate_triangles; // collapsed or zero area
+    std::vector<ProblemSpot> non_manifold_edges;
+    std::vector<ProblemSpot> non_manifold_vertices;
+    std::vector<ProblemSpot> misoriented_edges;
+};
+
 struct TopologyReport {
     std::int64_t vertices = 0;             // all vertices, referenced or not
     std::int64_t triangles = 0;            // all triangles
@@ -128,6 +149,7 @@ struct TopologyReport {
     bool oriented = true;                  // misoriented_edges == 0
 
     AngleStats min_angle;
+    ProblemSpots where;
 
     // Ordered by first_vertex, so reports of the same mesh compare equal.
     std::vector<ComponentReport> per_component;
