@@ -637,8 +637,7 @@ Piece GpuExtractor::extract(const Decomposition& decomposition, int domain, cons
     nodes_of.nz = box.hi[2] - box.lo[2];
     nodes_of.px = nodes_of.nx + 1;
     nodes_of.py = nodes_of.ny + 1;
-    nodes_of.open_faces = (box.lo[0] > 0 ? 1u : 0u) | (box.hi[0] < n - 1 ? 2u : 0u) | (box.lo[1] > 0 ? 4u : 0u) |
-                          (box.hi[1] < n - 1 ? 8u : 0u) | (box.lo[2] > 0 ? 16u : 0u) | (box.hi[2] < n - 1 ? 32u : 0u);
+    nodes_of.open_faces = decomposition.open_faces(domain);
     b.x.resize(nodes, "x");
     b.y.resize(nodes, "y");
     b.z.resize(nodes, "z");

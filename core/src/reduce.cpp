@@ -152,13 +152,18 @@ inline double norm2(Vec a) { return dot(a, a); }
 inline double norm(Vec a) { return std::sqrt(dot(a, a)); }
 
 // Sine of the smallest angle of triangle (a, b, c): twice the area over the
-// product of the two longer sides. 0 for a degenerate triangle.
-inline double quality(Vec a, Vec b, Vec c, Vec* normal_out = nullptr) {
+// product of the two longer sides. 0 for a degenerate triangle. height_out:
+// the height over the longest side.
+inline double quality(Vec a, Vec b, Vec c, Vec* normal_out = nullptr, double* height_out = nullptr) {
     const Vec ab = b - a, bc = c - b, ca = a - c;
     const Vec n = cross(ab, c - a);
     const double area2 = norm(n);
     if (normal_out) *normal_out = area2 > 0 ? (1.0 / area2) * n : Vec{0, 0, 0};
     double l0 = norm2(ab), l1 = norm2(bc), l2 = norm2(ca);
+    if (height_out) {
+        const double longest = std::max(l0, std::max(l1, l2));
+        *height_out = longest > 0 ? area2 / std::sqrt(longest) : 0.0;
+    }
     // Drop the shortest side.
     const double shortest = std::min(l0, std::min(l1, l2));
     double product;
@@ -669,13 +674,19 @@ void build_edges(const Fans& fans, int threads, Edges& edges, std::vector<i32>& 
 constexpr double kValidQuality = 1e-5;
 constexpr double kRoundingUlps = 4.0;
 
-inline bool resolved(Vec a, Vec b, Vec c, double q) {
+// q and height: quality()'s, for the same corners.
+inline bool resolved(Vec a, Vec b, Vec c, double q, double height) {
     if (!(q > kValidQuality)) return false;
-    const double longest2 = std::max(norm2(b - a), std::max(norm2(c - b), norm2(a - c)));
-    const double height = norm(cross(b - a, c - a)) / std::sqrt(longest2);
     const double extent = std::max({std::fabs(a.x), std::fabs(a.y), std::fabs(a.z), std::fabs(b.x), std::fabs(b.y),
                                     std::fabs(b.z), std::fabs(c.x), std::fabs(c.y), std::fabs(c.z)});
     return height > kRoundingUlps * std::numeric_limits<float>::epsilon() * extent;
+}
+
+// The same, measuring the triangle first (for the few faces that need it).
+inline bool resolved(Vec a, Vec b, Vec c) {
+    double height;
+    const double q = quality(a, b, c, nullptr, &height);
+    return resolved(a, b, c, q, height);
 }
 
 struct FaceGeometry {
@@ -695,9 +706,10 @@ void build_geometry(const Surface& s, int threads, std::vector<FaceGeometry>& ge
         const auto t = static_cast<std::size_t>(ti);
         Vec n;
         const Vec a = s.pos(s.tri[3 * t]), b = s.pos(s.tri[3 * t + 1]), c = s.pos(s.tri[3 * t + 2]);
-        const double q = quality(a, b, c, &n);
+        double height;
+        const double q = quality(a, b, c, &n, &height);
         geometry[t] = {static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z), static_cast<float>(q),
-                       s.err[t], 0, 0, resolved(a, b, c, q) ? 1 : 0};
+                       s.err[t], 0, 0, resolved(a, b, c, q, height) ? 1 : 0};
     });
 }
 
@@ -1357,7 +1369,7 @@ private:
             // way only once the collapse gives it a normal of its own.
             spoiled = q_new < q_floor || (!(q_new > 0) && g.valid()) ||
                       (g.valid() ? q_new > 0 && dot(n, g.n()) < p_.cos_turn
-                                 : resolved(p, a, b, q_new) && dot(n, nsum) < 0);
+                                 : resolved(p, a, b) && dot(n, nsum) < 0);
             if (faces < NewFan::kMax) {
                 fan.a[faces] = a;
                 fan.b[faces] = b;
