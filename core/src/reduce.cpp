@@ -944,7 +944,10 @@ void build_cones(const Surface& s, const Fans& fans, const std::vector<FaceGeome
 //    mean normal where it had none) and keeps a non-zero area; the smallest
 //    angle over the new faces is at least min(min_angle, the smallest angle
 //    over the old faces), so collapses that remove a degenerate face stay
-//    possible but none makes the worst angle of its region worse;
+//    possible but none makes the worst angle of its region worse. Faces
+//    that do not move (around a survivor that stays put) are not judged,
+//    and a valence-3 removal's one new face has no turn test (see
+//    legal_collapse);
 //  - no new contact: faces that share a corner meet nowhere else, among the
 //    new faces and between them and the faces around their outer corners
 //    (see Cones); contacts the replaced faces had already do not count;
@@ -1011,6 +1014,8 @@ u32 make_priority(u32 cls, double score, u64 hash) {
     return (cls << (kPriorityScoreBits + kPriorityHashBits)) | (s << kPriorityHashBits) |
            static_cast<u32>(hash & ((u64{1} << kPriorityHashBits) - 1));
 }
+
+u32 priority_class(u32 priority) { return priority >> (kPriorityScoreBits + kPriorityHashBits); }
 
 // The slots, in the fans of both ends, of the faces of an edge.
 struct EdgeSlots {
@@ -1237,7 +1242,7 @@ private:
         const bool bu = border(u), bw = border(w);
         bool pin_u = false, pin_w = false;
         pins(r, pin_u, pin_w);
-        const bool short_edge = ops.priority[i] >> (kPriorityScoreBits + kPriorityHashBits) == kClassShort;
+        const bool short_edge = priority_class(ops.priority[i]) == kClassShort;
         const Vec pu = s_.pos(u), pw = s_.pos(w);
         const double len = norm(pw - pu);
 
@@ -1349,6 +1354,16 @@ private:
             if (g.valid()) nsum = nsum + g.n();
         });
         const double q_floor = std::min(p_.q_min, q_worst);
+        // A valence-3 vertex's three faces become the one across their outer
+        // corners, whose area vector is the sum of theirs (an identity, for
+        // any position of the vertex): on average it turns from none of
+        // them, however far it turns from the one whose place it takes. That
+        // turn measured the height of the vertex above the new face, which is
+        // the error test's to judge, and it kept 38 valence-3 vertices in
+        // tiny clusters where the surface passes near a mesh node, each
+        // blocking the collapse of a needle's short edge (the link condition
+        // fails through it) in the N = 100 paper surface.
+        const bool removes_valence3 = priority_class(ops.priority[i]) == kClassValence3;
         // New faces: (p, next, prev) for every other face of both leaves.
         NewFan fan;
         fan.p = p;
@@ -1363,20 +1378,31 @@ private:
             Vec n;
             const double q_new = quality(p, a, b, &n);
             const FaceGeometry& g = geo(face(slot));
+            const i32 end = slot < r.ou + r.ku ? u : w;
+            // A face of the survivor's leaf, where the survivor stays put
+            // (a pinned end, a valence-3 removal), does not change and is not
+            // judged. Judged, it failed the quality floor whenever it was its
+            // region's worst face: its quality, recomputed from its corners
+            // in another order, came out a few units in the last place below
+            // the stored one. That refused most collapses next to a needle,
+            // and the needle stayed (304 triangles with an angle below 1° in
+            // the N = 100 paper surface's reduction, 49 without it).
+            const Vec pe = s_.pos(end);
+            const bool moves = p.x != pe.x || p.y != pe.y || p.z != pe.z;
             // No face with a normal of its own (valid) becomes degenerate or
             // turns; one whose normal is rounding's may become degenerate,
             // its own short edge will remove it, and must face the leaves'
             // way only once the collapse gives it a normal of its own.
-            spoiled = q_new < q_floor || (!(q_new > 0) && g.valid()) ||
-                      (g.valid() ? q_new > 0 && dot(n, g.n()) < p_.cos_turn
-                                 : resolved(p, a, b) && dot(n, nsum) < 0);
+            spoiled = moves && (q_new < q_floor || (!(q_new > 0) && g.valid()) ||
+                                (g.valid() ? q_new > 0 && !removes_valence3 && dot(n, g.n()) < p_.cos_turn
+                                           : resolved(p, a, b) && dot(n, nsum) < 0));
             if (faces < NewFan::kMax) {
                 fan.a[faces] = a;
                 fan.b[faces] = b;
                 fan.n[faces] = n;
                 fan.ia[faces] = ia;
                 fan.ib[faces] = ib;
-                fan.end[faces] = slot < r.ou + r.ku ? u : w;
+                fan.end[faces] = end;
                 fan.tri[faces] = face(slot);
             }
             ++faces;
