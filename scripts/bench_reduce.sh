@@ -78,7 +78,8 @@ python3 "$root/scripts/bench_report_common.py" meta "$out/meta.json" \
   "libraries=$libraries" \
   "load_before=$load_before" "load_after=$load_after" \
   "environment=$(bench_environment)" \
-  "compile_options=$(sed -n 's/^add_compile_options(\(.*\))$/\1/p' "$source_dir/CMakeLists.txt")"
+  "compile_options=$(sed -n 's/^add_compile_options("$<$<COMPILE_LANGUAGE:CXX>:\(.*\)>")$/\1/p' "$source_dir/CMakeLists.txt" |
+    head -1 | tr ';' ' ')"
 
 python3 "$root/scripts/report_reduce.py" "$out"
 echo "wrote $out/README.md"
