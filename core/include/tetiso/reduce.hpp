@@ -50,9 +50,11 @@ struct ReduceOptions {
     // min(min_angle_degrees, that region's smallest angle before), so
     // collapses that clean up degenerate triangles stay possible but no
     // operation creates a triangle worse than the bound out of good ones.
-    // 1 degree is the checker's "near degenerate" line; larger bounds block
-    // collapses that would later remove the input's slivers, and leave more
-    // of them (measured on the paper surface). Valid range [0, 30].
+    // 1 degree is the checker's "near degenerate" line. Larger bounds cost
+    // triangles and buy little: on the N = 100 paper surface at 0.25 h
+    // (06a3754, 2-core VM), 1° gives 103,601 triangles, 30 of them with an
+    // angle below 1° and 963 below 5°; 5° gives 107,750 (+4 %), 19 and 486;
+    // 10° gives 114,320 (+10 %), 33 and 485. Valid range [0, 30].
     double min_angle_degrees = 1.0;
     // Absolute bound on the distance from every vertex of the input to the
     // reduced surface: every input vertex is tracked, so the bound is exact
