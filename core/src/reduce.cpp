@@ -68,16 +68,15 @@ int resolve_threads(int threads) {
     return threads < 1 ? 1 : threads;
 }
 
-// The most threads a round uses, whatever it is offered. A round is a
-// dozen short parallel loops with a join after each, and past eight threads
-// the joins cost more than the work they share: on the 16-core device,
-// gyroid surfaces of 29 K, 84 K, 193 K and 346 K triangles were each
-// reduced faster with 8 threads than with 16 (0.16 against 0.30 s, 0.30
-// against 0.53 s, 0.49 against 0.62 s, 0.87 against 0.94 s, medians of 3;
-// results/speedup/README.md, session 12). Capping the rounds, rather than
-// the vertices per thread, keeps the late rounds parallel: they are small
-// but their tests are the dearest, each face holding tens of samples.
-constexpr int kMaxRoundThreads = 8;
+// The most threads a round uses, whatever it is offered: the most measured.
+// A round is a dozen short parallel loops with a join after each. While the
+// lists, masks, counting sorts and compaction of a round ran on one thread,
+// eight threads beat sixteen on the 16-core device (session 12); with them
+// parallel (session 28), sixteen were as fast or faster at every size, from
+// an 84 K-triangle gyroid surface (0.195 against 0.227 s, medians of 3) to
+// the 1.64 M-triangle paper surface at N = 100 (2.44 against 3.72 s;
+// results/speedup/README.md).
+constexpr int kMaxRoundThreads = 16;
 
 // Below this many elements a loop runs on the calling thread: a fork and join
 // costs more than the work, and far more on an oversubscribed machine.
@@ -135,6 +134,99 @@ void exclusive_scan(const std::vector<i32>& counts, std::vector<i32>& offsets) {
     }
     if (sum > std::numeric_limits<i32>::max()) throw Error("tetiso::reduce: mesh too large for 32-bit indices");
     offsets[counts.size()] = static_cast<i32>(sum);
+}
+
+// The scans and filters below split [0, n) into one contiguous block per
+// thread: each block counts its share, the counts are summed in block order,
+// and each block writes its part from there. Integer sums and block order
+// only, so the result is the serial loop's for any thread count. Loops that
+// stayed serial while the rest of a round ran on eight threads (the lists of
+// candidates and flips, the refusal masks, the counting sorts, compaction)
+// held a large part of a multi-threaded round's time.
+struct Blocks {
+    i64 n, count;
+    Blocks(int threads, i64 size) : n(size), count(threads > 1 && size > kParallelMin ? threads : 1) {}
+    i64 begin(i64 b) const { return n * b / count; }
+    bool parallel() const { return count > 1; }
+};
+
+// out = every i < n with keep(i), ascending. keep runs twice per element on
+// several threads (count, then write), so it must be cheap and pure.
+template <class Keep>
+void parallel_filter(int threads, i64 n, const Keep& keep, std::vector<i32>& out) {
+    const Blocks blocks(threads, n);
+    if (!blocks.parallel()) {
+        out.clear();
+        for (i64 i = 0; i < n; ++i)
+            if (keep(i)) out.push_back(static_cast<i32>(i));
+        return;
+    }
+    std::vector<i64> first(static_cast<std::size_t>(blocks.count) + 1, 0);
+    parallel_for(threads, blocks.count, [&](i64 b) {
+        i64 c = 0;
+        for (i64 i = blocks.begin(b); i < blocks.begin(b + 1); ++i) c += keep(i) ? 1 : 0;
+        first[static_cast<std::size_t>(b) + 1] = c;
+    }, 0);
+    for (std::size_t b = 0; b < static_cast<std::size_t>(blocks.count); ++b) first[b + 1] += first[b];
+    out.resize(static_cast<std::size_t>(first.back()));
+    parallel_for(threads, blocks.count, [&](i64 b) {
+        auto at = static_cast<std::size_t>(first[static_cast<std::size_t>(b)]);
+        for (i64 i = blocks.begin(b); i < blocks.begin(b + 1); ++i)
+            if (keep(i)) out[at++] = static_cast<i32>(i);
+    }, 0);
+}
+
+// rank[i] = the number of kept elements before i, for each kept i; -1 for
+// the others. Returns the number kept.
+template <class Keep>
+i32 parallel_rank(int threads, i64 n, const Keep& keep, std::vector<i32>& rank) {
+    rank.resize(static_cast<std::size_t>(n));
+    const Blocks blocks(threads, n);
+    std::vector<i64> first(static_cast<std::size_t>(blocks.count) + 1, 0);
+    if (blocks.parallel())
+        parallel_for(threads, blocks.count, [&](i64 b) {
+            i64 c = 0;
+            for (i64 i = blocks.begin(b); i < blocks.begin(b + 1); ++i) c += keep(i) ? 1 : 0;
+            first[static_cast<std::size_t>(b) + 1] = c;
+        }, 0);
+    for (std::size_t b = 0; b < static_cast<std::size_t>(blocks.count); ++b) first[b + 1] += first[b];
+    std::vector<i64> kept(static_cast<std::size_t>(blocks.count), 0);
+    parallel_for(blocks.parallel() ? threads : 1, blocks.count, [&](i64 b) {
+        i64 next = first[static_cast<std::size_t>(b)];
+        for (i64 i = blocks.begin(b); i < blocks.begin(b + 1); ++i)
+            rank[static_cast<std::size_t>(i)] = keep(i) ? static_cast<i32>(next++) : -1;
+        kept[static_cast<std::size_t>(b)] = next - first[static_cast<std::size_t>(b)];
+    }, 0);
+    i64 total = 0;
+    for (const i64 k : kept) total += k;
+    return static_cast<i32>(total);
+}
+
+// The number of i < n with counted(i) (an integer sum).
+template <class Counted>
+i64 parallel_count(int threads, i64 n, const Counted& counted) {
+    const Blocks blocks(threads, n);
+    std::vector<i64> part(static_cast<std::size_t>(blocks.count), 0);
+    parallel_for(blocks.parallel() ? threads : 1, blocks.count, [&](i64 b) {
+        i64 c = 0;
+        for (i64 i = blocks.begin(b); i < blocks.begin(b + 1); ++i) c += counted(i) ? 1 : 0;
+        part[static_cast<std::size_t>(b)] = c;
+    }, 0);
+    i64 total = 0;
+    for (const i64 c : part) total += c;
+    return total;
+}
+
+// Sorts a short run in place (a vertex's corners, a face's samples): an
+// insertion sort, which costs nothing on a run already in order and beats
+// std::sort's call on the few elements these runs hold.
+inline void sort_short_run(i32* first, i32* last) {
+    for (i32* i = first + (first != last); i < last; ++i) {
+        const i32 value = *i;
+        i32* j = i;
+        for (; j > first && *(j - 1) > value; --j) *j = *(j - 1);
+        *j = value;
+    }
 }
 
 // ---------------------------------------------------------------------------
@@ -351,27 +443,54 @@ struct Samples {
     }
 
     // Stable counting sort by owner; each face's range goes straight into
-    // its record (faces: the round's FaceGeometry, one per triangle).
+    // its record (faces: the round's FaceGeometry, one per triangle). On
+    // several threads the counters are atomic and each face's samples are
+    // put back in their old order before they are moved, as build_fans does
+    // with its corners: the order is one thread's for any count.
     template <class Faces>
-    void sort(Faces& faces) {
+    void sort(Faces& faces, int threads) {
+        const auto ns = static_cast<i64>(owner.size());
+        const bool atomic = threads > 1 && ns > kParallelMin;
         fill_.assign(faces.size(), 0);
-        for (const i32 t : owner) ++fill_[static_cast<std::size_t>(t)];
-        i32 begin = 0;
-        for (std::size_t t = 0; t < faces.size(); ++t) {
-            const i32 count = fill_[t];
-            faces[t].samples_begin = begin;
-            faces[t].samples_end = begin + count;
-            fill_[t] = begin;
-            begin += count;
-        }
+        if (atomic)
+            parallel_for(threads, ns, [&](i64 i) {
+                std::atomic_ref<i32>(fill_[static_cast<std::size_t>(owner[static_cast<std::size_t>(i)])])
+                    .fetch_add(1, std::memory_order_relaxed);
+            });
+        else
+            for (const i32 t : owner) ++fill_[static_cast<std::size_t>(t)];
+        exclusive_scan(fill_, begin_);
+        parallel_for(threads, static_cast<i64>(faces.size()), [&](i64 ti) {
+            const auto t = static_cast<std::size_t>(ti);
+            faces[t].samples_begin = begin_[t];
+            faces[t].samples_end = begin_[t + 1];
+            fill_[t] = begin_[t];
+        });
         sorted_point_.resize(point.size());
         sorted_owner_.resize(owner.size());
         sorted_far_.resize(far.size());
-        for (std::size_t i = 0; i < owner.size(); ++i) {
-            const auto at = static_cast<std::size_t>(fill_[static_cast<std::size_t>(owner[i])]++);
+        auto move = [&](std::size_t i, std::size_t at) {
             sorted_point_[at] = point[i];
             sorted_owner_[at] = owner[i];
             if (!far.empty()) sorted_far_[at] = far[i];
+        };
+        if (atomic) {
+            source_.resize(owner.size());
+            parallel_for(threads, ns, [&](i64 i) {
+                const i32 at = std::atomic_ref<i32>(fill_[static_cast<std::size_t>(owner[static_cast<std::size_t>(i)])])
+                                   .fetch_add(1, std::memory_order_relaxed);
+                source_[static_cast<std::size_t>(at)] = static_cast<i32>(i);
+            });
+            parallel_for(threads, static_cast<i64>(faces.size()), [&](i64 t) {
+                i32* const run = source_.data() + begin_[static_cast<std::size_t>(t)];
+                sort_short_run(run, source_.data() + begin_[static_cast<std::size_t>(t) + 1]);
+            });
+            parallel_for(threads, ns, [&](i64 at) {
+                move(static_cast<std::size_t>(source_[static_cast<std::size_t>(at)]), static_cast<std::size_t>(at));
+            });
+        } else {
+            for (std::size_t i = 0; i < owner.size(); ++i)
+                move(i, static_cast<std::size_t>(fill_[static_cast<std::size_t>(owner[i])]++));
         }
         point.swap(sorted_point_);
         owner.swap(sorted_owner_);
@@ -408,7 +527,7 @@ struct Samples {
     }
 
 private:
-    std::vector<i32> fill_;
+    std::vector<i32> fill_, begin_, source_;
     std::vector<Point> sorted_point_;
     std::vector<i32> sorted_owner_;
     std::vector<i32> sorted_far_;
@@ -451,18 +570,36 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
     const i32 nv = s.vertices(), nt = s.triangles();
     auto& count = scratch_count;
     count.assign(static_cast<std::size_t>(nv), 0);
-    for (i32 c = 0; c < 3 * nt; ++c) ++count[static_cast<std::size_t>(s.tri[static_cast<std::size_t>(c)])];
+    // Each vertex's corners: a counting sort, on several threads by atomic
+    // counters, which leave the corners of a vertex in any order; the
+    // ordering below sorts them back into triangle order first, so every
+    // count gives the fans (and, for bad input, the error) of one thread.
+    const i64 corners = 3 * static_cast<i64>(nt);
+    const bool atomic = threads > 1 && corners > kParallelMin;
+    if (atomic)
+        parallel_for(threads, corners, [&](i64 c) {
+            std::atomic_ref<i32>(count[static_cast<std::size_t>(s.tri[static_cast<std::size_t>(c)])])
+                .fetch_add(1, std::memory_order_relaxed);
+        });
+    else
+        for (i64 c = 0; c < corners; ++c) ++count[static_cast<std::size_t>(s.tri[static_cast<std::size_t>(c)])];
     exclusive_scan(count, fans.off);
-    // Corners in triangle order within each vertex: a counting sort.
     auto& corner = scratch_corner;
-    corner.resize(static_cast<std::size_t>(3 * nt));
+    corner.resize(static_cast<std::size_t>(corners));
     {
         std::vector<i32>& fill = count;
-        std::copy(fans.off.begin(), fans.off.end() - 1, fill.begin());
-        for (i32 c = 0; c < 3 * nt; ++c) {
-            const i32 v = s.tri[static_cast<std::size_t>(c)];
-            corner[static_cast<std::size_t>(fill[static_cast<std::size_t>(v)]++)] = c;
-        }
+        parallel_for(threads, nv, [&](i64 v) { fill[static_cast<std::size_t>(v)] = fans.off[static_cast<std::size_t>(v)]; });
+        if (atomic)
+            parallel_for(threads, corners, [&](i64 c) {
+                const i32 v = s.tri[static_cast<std::size_t>(c)];
+                const i32 at = std::atomic_ref<i32>(fill[static_cast<std::size_t>(v)]).fetch_add(1, std::memory_order_relaxed);
+                corner[static_cast<std::size_t>(at)] = static_cast<i32>(c);
+            });
+        else
+            for (i64 c = 0; c < corners; ++c) {
+                const i32 v = s.tri[static_cast<std::size_t>(c)];
+                corner[static_cast<std::size_t>(fill[static_cast<std::size_t>(v)]++)] = static_cast<i32>(c);
+            }
     }
     fans.face.resize(corner.size());
     fans.next.resize(corner.size());
@@ -492,8 +629,10 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
             succ = order + k;
             pred = succ + k;
         }
+        i32* const mine = corner.data() + o;
+        if (atomic) sort_short_run(mine, mine + k);
         for (i32 i = 0; i < k; ++i) {
-            const i32 c = corner[static_cast<std::size_t>(o + i)];
+            const i32 c = mine[i];
             const i32 tri = c / 3, r = c % 3;
             t[i] = tri;
             a[i] = s.tri[static_cast<std::size_t>(3 * tri + (r + 1) % 3)];
@@ -597,6 +736,9 @@ struct EdgeFaces {
 
 struct Edges {
     std::vector<i32> v0, v1, s0;
+    // The edges vertex v owns are first[v] .. first[v + 1]: build_edges
+    // writes them grouped by v0, in ascending v0.
+    std::vector<i32> first;
     i32 count() const { return static_cast<i32>(v0.size()); }
 
     EdgeFaces faces(const Fans& fans, i32 e) const {
@@ -621,8 +763,7 @@ struct Edges {
     }
 };
 
-void build_edges(const Fans& fans, int threads, Edges& edges, std::vector<i32>& scratch_count,
-                 std::vector<i32>& scratch_offset) {
+void build_edges(const Fans& fans, int threads, Edges& edges, std::vector<i32>& scratch_count) {
     const i32 nv = static_cast<i32>(fans.off.size()) - 1;
     auto& count = scratch_count;
     count.resize(static_cast<std::size_t>(nv));
@@ -632,7 +773,7 @@ void build_edges(const Fans& fans, int threads, Edges& edges, std::vector<i32>& 
         for (i32 j = 0, n = fans.nn(v); j < n; ++j) c += fans.nbr(v, j) > v;
         count[static_cast<std::size_t>(v)] = c;
     });
-    auto& eoff = scratch_offset;
+    auto& eoff = edges.first;
     exclusive_scan(count, eoff);
     const auto ne = static_cast<std::size_t>(eoff[static_cast<std::size_t>(nv)]);
     for (auto* a : {&edges.v0, &edges.v1, &edges.s0}) a->resize(ne);
@@ -2372,53 +2513,62 @@ bool unchanged(const Fans& fans, const Edges& edges, const std::vector<u8>& chan
 }
 
 // Step 7: drop removed vertices and triangles, keeping the order of the rest
-// (so keys stay sorted). The scans are integer sums; the copies are gathers.
+// (so keys stay sorted). The ranks are integer scans; the copies are gathers
+// into the spare arrays, which then change places with the live ones.
 // vertex_marks, vertex_masks: per-vertex arrays that follow the vertices
 // (changed, refused_slots); triangle_refs: triangle indices to renumber (the
 // samples' owners).
+struct CompactSpare {
+    Surface surface;
+    std::vector<u8> marks;
+    std::vector<u32> masks;
+};
+
 void compact(Surface& s, const std::vector<u8>& vertex_alive, const std::vector<u8>& triangle_alive, int threads,
              std::vector<u8>& vertex_marks, std::vector<u32>& vertex_masks, std::vector<i32>& triangle_refs,
-             std::vector<i32>& remap, std::vector<i32>& scratch, Surface& spare) {
+             std::vector<i32>& remap, std::vector<i32>& scratch, CompactSpare& spare) {
     const i32 nv = s.vertices(), nt = s.triangles();
-    remap.resize(static_cast<std::size_t>(nv));
-    i32 next = 0;
-    for (i32 v = 0; v < nv; ++v) remap[static_cast<std::size_t>(v)] = vertex_alive[static_cast<std::size_t>(v)] ? next++ : -1;
-    // In place: entry v moves to remap[v] <= v, so a forward sweep is safe.
-    for (i32 v = 0; v < nv; ++v) {
-        const i32 r = remap[static_cast<std::size_t>(v)];
-        if (r < 0 || r == v) continue;
-        const auto a = static_cast<std::size_t>(r), b = static_cast<std::size_t>(v);
-        for (std::size_t c = 0; c < 3; ++c) s.xyz[3 * a + c] = s.xyz[3 * b + c];
-        s.key[a] = s.key[b];
-        s.flags[a] = s.flags[b];
-        vertex_marks[a] = vertex_marks[b];
-        vertex_masks[a] = vertex_masks[b];
-    }
-    s.xyz.resize(3 * static_cast<std::size_t>(next));
-    s.key.resize(static_cast<std::size_t>(next));
-    s.flags.resize(static_cast<std::size_t>(next));
-    vertex_marks.resize(static_cast<std::size_t>(next));
-    vertex_masks.resize(static_cast<std::size_t>(next));
+    const i32 next = parallel_rank(threads, nv, [&](i64 v) { return vertex_alive[static_cast<std::size_t>(v)] != 0; }, remap);
+    Surface& to = spare.surface;
+    to.xyz.resize(3 * static_cast<std::size_t>(next));
+    to.key.resize(static_cast<std::size_t>(next));
+    to.flags.resize(static_cast<std::size_t>(next));
+    spare.marks.resize(static_cast<std::size_t>(next));
+    spare.masks.resize(static_cast<std::size_t>(next));
+    parallel_for(threads, nv, [&](i64 vi) {
+        const auto v = static_cast<std::size_t>(vi);
+        const i32 r = remap[v];
+        if (r < 0) return;
+        const auto a = static_cast<std::size_t>(r);
+        for (std::size_t c = 0; c < 3; ++c) to.xyz[3 * a + c] = s.xyz[3 * v + c];
+        to.key[a] = s.key[v];
+        to.flags[a] = s.flags[v];
+        spare.marks[a] = vertex_marks[v];
+        spare.masks[a] = vertex_masks[v];
+    });
+    s.xyz.swap(to.xyz);
+    s.key.swap(to.key);
+    s.flags.swap(to.flags);
+    vertex_marks.swap(spare.marks);
+    vertex_masks.swap(spare.masks);
     auto& tpos = scratch;
-    tpos.resize(static_cast<std::size_t>(nt));
-    i32 tn = 0;
-    for (i32 t = 0; t < nt; ++t) tpos[static_cast<std::size_t>(t)] = triangle_alive[static_cast<std::size_t>(t)] ? tn++ : -1;
-    std::vector<i32>& tri = spare.tri;
-    std::vector<float>& err = spare.err;
-    tri.resize(static_cast<std::size_t>(3 * tn));
-    err.resize(static_cast<std::size_t>(tn));
+    const i32 tn = parallel_rank(threads, nt, [&](i64 t) { return triangle_alive[static_cast<std::size_t>(t)] != 0; }, tpos);
+    to.tri.resize(static_cast<std::size_t>(3 * tn));
+    to.err.resize(static_cast<std::size_t>(tn));
     parallel_for(threads, nt, [&](i64 ti) {
         const auto t = static_cast<std::size_t>(ti);
-        const i32 to = tpos[t];
-        if (to < 0) return;
+        const i32 at = tpos[t];
+        if (at < 0) return;
         for (std::size_t r = 0; r < 3; ++r)
-            tri[3 * static_cast<std::size_t>(to) + r] = remap[static_cast<std::size_t>(s.tri[3 * t + r])];
-        err[static_cast<std::size_t>(to)] = s.err[t];
+            to.tri[3 * static_cast<std::size_t>(at) + r] = remap[static_cast<std::size_t>(s.tri[3 * t + r])];
+        to.err[static_cast<std::size_t>(at)] = s.err[t];
     });
-    s.tri.swap(tri);
-    s.err.swap(err);
-    for (i32& t : triangle_refs)
+    s.tri.swap(to.tri);
+    s.err.swap(to.err);
+    parallel_for(threads, static_cast<i64>(triangle_refs.size()), [&](i64 i) {
+        i32& t = triangle_refs[static_cast<std::size_t>(i)];
         if (t >= 0) t = tpos[static_cast<std::size_t>(t)];
+    });
 }
 
 } // namespace
@@ -2457,7 +2607,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     std::vector<Cone> cones;
     Ops ops;
     std::vector<i32> scratch_a, scratch_b, remap;
-    Surface spare; // compact()'s second triangle and error arrays
+    CompactSpare spare; // compact()'s second set of arrays
     std::vector<u8> chosen, refused, vertex_alive, triangle_alive;
     std::vector<u8> changed(in.vertex_count(), 0);
     std::vector<u32> refused_slots(in.vertex_count(), 0);
@@ -2483,7 +2633,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         st.fans += since(t0);
         if (round >= options.max_rounds) break;
         t0 = now();
-        build_edges(fans, threads, edges, scratch_a, scratch_b);
+        build_edges(fans, threads, edges, scratch_a);
         st.edges += since(t0);
         t0 = now();
         build_geometry(s, threads, geometry);
@@ -2492,7 +2642,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         const i32 ne = edges.count();
         ops.resize(static_cast<std::size_t>(ne));
         refused.assign(static_cast<std::size_t>(ne), 0);
-        if (samples.on()) samples.sort(geometry);
+        if (samples.on()) samples.sort(geometry, threads);
         build_cones(s, fans, geometry, threads, cones);
         const Evaluator evaluator(s, fans, edges, geometry, cones, samples.on() ? &samples : nullptr, params, round);
         parallel_for(threads, ne, [&](i64 ei) {
@@ -2501,11 +2651,10 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
             else evaluator.classify(static_cast<i32>(e), ops);
         });
         chosen.assign(static_cast<std::size_t>(ne), 0);
-        candidate_list.clear();
-        for (i32 e = 0; e < ne; ++e) {
+        parallel_filter(threads, ne, [&](i64 e) {
             const u8 kind = ops.kind[static_cast<std::size_t>(e)];
-            if (kind == kPending || kind == kCollapse) candidate_list.push_back(e);
-        }
+            return kind == kPending || kind == kCollapse;
+        }, candidate_list);
         st.propose += since(t0);
         ReduceRound stats;
         stats.round = round;
@@ -2526,14 +2675,14 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         // e", the answer refused_slots keeps; a blocked edge's answer is
         // unknown.
         selector.claim_chosen(threads, candidate_list, chosen);
-        flip_list.clear();
-        for (i32 e = 0; e < ne; ++e) {
+        parallel_for(threads, ne, [&](i64 e) {
             const auto i = static_cast<std::size_t>(e);
-            if (ops.kind[i] != kNone) continue;
-            refused[i] = 0;
-            if (!params.flips || edges.border(fans, e)) refused[i] = 1;
-            else if (selector.clear(e)) flip_list.push_back(e);
-        }
+            if (ops.kind[i] == kNone) refused[i] = !params.flips || edges.border(fans, static_cast<i32>(e));
+        });
+        parallel_filter(threads, ne, [&](i64 e) {
+            const auto i = static_cast<std::size_t>(e);
+            return ops.kind[i] == kNone && !refused[i] && selector.clear(static_cast<i32>(e));
+        }, flip_list);
         parallel_for(threads, static_cast<i64>(flip_list.size()), [&](i64 fi) {
             const i32 e = flip_list[static_cast<std::size_t>(fi)];
             if (!evaluator.propose_flip(e, ops)) refused[static_cast<std::size_t>(e)] = 1;
@@ -2542,28 +2691,30 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
         std::erase_if(flip_list, [&](i32 e) { return ops.kind[static_cast<std::size_t>(e)] != kFlip; });
         const std::size_t flips_offered = flip_list.size();
         selector.choose_flips(flip_list, chosen);
-        std::fill(refused_slots.begin(), refused_slots.end(), u32{0});
-        for (i32 e = 0; e < ne; ++e) {
-            const auto i = static_cast<std::size_t>(e);
-            if ((ops.kind[i] == kQuiet || refused[i]) && edges.s0[i] < kRefusedSlots)
-                refused_slots[static_cast<std::size_t>(edges.v0[i])] |= u32{1} << edges.s0[i];
-        }
-        for (const i32 e : candidate_list)
-            if (ops.kind[static_cast<std::size_t>(e)] != kPending) ++evaluated;
+        parallel_for(threads, s.vertices(), [&](i64 v) {
+            u32 mask = 0;
+            for (i32 e = edges.first[static_cast<std::size_t>(v)]; e < edges.first[static_cast<std::size_t>(v) + 1]; ++e) {
+                const auto i = static_cast<std::size_t>(e);
+                if ((ops.kind[i] == kQuiet || refused[i]) && edges.s0[i] < kRefusedSlots) mask |= u32{1} << edges.s0[i];
+            }
+            refused_slots[static_cast<std::size_t>(v)] = mask;
+        });
+        evaluated += static_cast<std::size_t>(parallel_count(threads, static_cast<i64>(candidate_list.size()), [&](i64 k) {
+            return ops.kind[static_cast<std::size_t>(candidate_list[static_cast<std::size_t>(k)])] != kPending;
+        }));
         stats.candidates = candidate_list.size() + flips_offered;
         stats.evaluated = evaluated;
         st.select += since(t0);
         t0 = now();
         // Samples still to move: those of the flips (a collapse's test moved
         // its samples when it was chosen).
-        to_move.clear();
-        for (i32 e = 0; e < ne; ++e) {
-            const auto i = static_cast<std::size_t>(e);
-            if (!chosen[i]) continue;
-            if (ops.kind[i] == kCollapse) ++stats.collapses;
-            else ++stats.flips;
-            if (ops.kind[i] == kFlip) to_move.push_back(e);
-        }
+        stats.collapses = static_cast<std::size_t>(parallel_count(threads, ne, [&](i64 e) {
+            return chosen[static_cast<std::size_t>(e)] && ops.kind[static_cast<std::size_t>(e)] == kCollapse;
+        }));
+        parallel_filter(threads, ne, [&](i64 e) {
+            return chosen[static_cast<std::size_t>(e)] && ops.kind[static_cast<std::size_t>(e)] == kFlip;
+        }, to_move);
+        stats.flips = to_move.size();
         if (stats.collapses == 0 && stats.flips == 0) { // the next round would find what this one did
             stats.seconds = since(round_start);
             rep.rounds.push_back(stats);
@@ -2577,7 +2728,9 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
                 evaluator.move_flip_samples(to_move[static_cast<std::size_t>(m)], samples.owner);
             });
         apply(s, fans, edges, ops, chosen, threads, vertex_alive, triangle_alive, changed);
-        for (std::size_t v = 0; v < changed.size(); ++v) stats.changed_vertices += changed[v] & vertex_alive[v];
+        stats.changed_vertices = static_cast<std::size_t>(parallel_count(threads, static_cast<i64>(changed.size()), [&](i64 v) {
+            return (changed[static_cast<std::size_t>(v)] & vertex_alive[static_cast<std::size_t>(v)]) != 0;
+        }));
         st.apply += since(t0);
         t0 = now();
         if (stats.collapses > 0) compact(s, vertex_alive, triangle_alive, threads, changed, refused_slots, samples.owner, remap, scratch_a, spare);
