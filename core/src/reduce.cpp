@@ -150,6 +150,20 @@ struct Blocks {
     bool parallel() const { return count > 1; }
 };
 
+// first[b] = the number of kept elements in the blocks before block b, for
+// b = 0 .. blocks.count (the last: all of them). keep runs once per element.
+template <class Keep>
+std::vector<i64> block_starts(int threads, const Blocks& blocks, const Keep& keep) {
+    std::vector<i64> first(static_cast<std::size_t>(blocks.count) + 1, 0);
+    parallel_for(blocks.parallel() ? threads : 1, blocks.count, [&](i64 b) {
+        i64 c = 0;
+        for (i64 i = blocks.begin(b); i < blocks.begin(b + 1); ++i) c += keep(i) ? 1 : 0;
+        first[static_cast<std::size_t>(b) + 1] = c;
+    }, 0);
+    for (std::size_t b = 0; b < static_cast<std::size_t>(blocks.count); ++b) first[b + 1] += first[b];
+    return first;
+}
+
 // out = every i < n with keep(i), ascending. keep runs twice per element on
 // several threads (count, then write), so it must be cheap and pure.
 template <class Keep>
@@ -161,13 +175,7 @@ void parallel_filter(int threads, i64 n, const Keep& keep, std::vector<i32>& out
             if (keep(i)) out.push_back(static_cast<i32>(i));
         return;
     }
-    std::vector<i64> first(static_cast<std::size_t>(blocks.count) + 1, 0);
-    parallel_for(threads, blocks.count, [&](i64 b) {
-        i64 c = 0;
-        for (i64 i = blocks.begin(b); i < blocks.begin(b + 1); ++i) c += keep(i) ? 1 : 0;
-        first[static_cast<std::size_t>(b) + 1] = c;
-    }, 0);
-    for (std::size_t b = 0; b < static_cast<std::size_t>(blocks.count); ++b) first[b + 1] += first[b];
+    const std::vector<i64> first = block_starts(threads, blocks, keep);
     out.resize(static_cast<std::size_t>(first.back()));
     parallel_for(threads, blocks.count, [&](i64 b) {
         auto at = static_cast<std::size_t>(first[static_cast<std::size_t>(b)]);
@@ -182,39 +190,24 @@ template <class Keep>
 i32 parallel_rank(int threads, i64 n, const Keep& keep, std::vector<i32>& rank) {
     rank.resize(static_cast<std::size_t>(n));
     const Blocks blocks(threads, n);
-    std::vector<i64> first(static_cast<std::size_t>(blocks.count) + 1, 0);
-    if (blocks.parallel())
-        parallel_for(threads, blocks.count, [&](i64 b) {
-            i64 c = 0;
-            for (i64 i = blocks.begin(b); i < blocks.begin(b + 1); ++i) c += keep(i) ? 1 : 0;
-            first[static_cast<std::size_t>(b) + 1] = c;
-        }, 0);
-    for (std::size_t b = 0; b < static_cast<std::size_t>(blocks.count); ++b) first[b + 1] += first[b];
-    std::vector<i64> kept(static_cast<std::size_t>(blocks.count), 0);
-    parallel_for(blocks.parallel() ? threads : 1, blocks.count, [&](i64 b) {
+    if (!blocks.parallel()) {
+        i32 next = 0;
+        for (i64 i = 0; i < n; ++i) rank[static_cast<std::size_t>(i)] = keep(i) ? next++ : -1;
+        return next;
+    }
+    const std::vector<i64> first = block_starts(threads, blocks, keep);
+    parallel_for(threads, blocks.count, [&](i64 b) {
         i64 next = first[static_cast<std::size_t>(b)];
         for (i64 i = blocks.begin(b); i < blocks.begin(b + 1); ++i)
             rank[static_cast<std::size_t>(i)] = keep(i) ? static_cast<i32>(next++) : -1;
-        kept[static_cast<std::size_t>(b)] = next - first[static_cast<std::size_t>(b)];
     }, 0);
-    i64 total = 0;
-    for (const i64 k : kept) total += k;
-    return static_cast<i32>(total);
+    return static_cast<i32>(first.back());
 }
 
 // The number of i < n with counted(i) (an integer sum).
 template <class Counted>
 i64 parallel_count(int threads, i64 n, const Counted& counted) {
-    const Blocks blocks(threads, n);
-    std::vector<i64> part(static_cast<std::size_t>(blocks.count), 0);
-    parallel_for(blocks.parallel() ? threads : 1, blocks.count, [&](i64 b) {
-        i64 c = 0;
-        for (i64 i = blocks.begin(b); i < blocks.begin(b + 1); ++i) c += counted(i) ? 1 : 0;
-        part[static_cast<std::size_t>(b)] = c;
-    }, 0);
-    i64 total = 0;
-    for (const i64 c : part) total += c;
-    return total;
+    return block_starts(threads, Blocks(threads, n), counted).back();
 }
 
 // Sorts a short run in place (a vertex's corners, a face's samples): an
