@@ -222,6 +222,38 @@ inline void sort_short_run(i32* first, i32* last) {
     }
 }
 
+// A stable counting sort of the indices 0 .. n-1 by key(i) in 0 .. groups-1:
+// group g is order[first[g]] .. order[first[g + 1]], its indices ascending.
+// On several threads the counters are atomic, which leaves each group in any
+// order, so each is sorted back afterwards: the result is one thread's for
+// any count. count: scratch, one per group.
+template <class Key>
+void group_by_key(int threads, i64 n, i64 groups, const Key& key, std::vector<i32>& first,
+                  std::vector<i32>& order, std::vector<i32>& count) {
+    const bool atomic = threads > 1 && n > kParallelMin;
+    count.assign(static_cast<std::size_t>(groups), 0);
+    if (atomic)
+        parallel_for(threads, n, [&](i64 i) {
+            std::atomic_ref<i32>(count[static_cast<std::size_t>(key(i))]).fetch_add(1, std::memory_order_relaxed);
+        });
+    else
+        for (i64 i = 0; i < n; ++i) ++count[static_cast<std::size_t>(key(i))];
+    exclusive_scan(count, first);
+    parallel_for(threads, groups, [&](i64 g) { count[static_cast<std::size_t>(g)] = first[static_cast<std::size_t>(g)]; });
+    order.resize(static_cast<std::size_t>(n));
+    if (!atomic) {
+        for (i64 i = 0; i < n; ++i) order[static_cast<std::size_t>(count[static_cast<std::size_t>(key(i))]++)] = static_cast<i32>(i);
+        return;
+    }
+    parallel_for(threads, n, [&](i64 i) {
+        const i32 at = std::atomic_ref<i32>(count[static_cast<std::size_t>(key(i))]).fetch_add(1, std::memory_order_relaxed);
+        order[static_cast<std::size_t>(at)] = static_cast<i32>(i);
+    });
+    parallel_for(threads, groups, [&](i64 g) {
+        sort_short_run(order.data() + first[static_cast<std::size_t>(g)], order.data() + first[static_cast<std::size_t>(g) + 1]);
+    });
+}
+
 // ---------------------------------------------------------------------------
 // Small geometry in double precision (coordinates are stored as float).
 
@@ -435,56 +467,29 @@ struct Samples {
             }
     }
 
-    // Stable counting sort by owner; each face's range goes straight into
-    // its record (faces: the round's FaceGeometry, one per triangle). On
-    // several threads the counters are atomic and each face's samples are
-    // put back in their old order before they are moved, as build_fans does
-    // with its corners: the order is one thread's for any count.
+    // Stable counting sort by owner (group_by_key); each face's range goes
+    // straight into its record (faces: the round's FaceGeometry, one per
+    // triangle).
     template <class Faces>
     void sort(Faces& faces, int threads) {
         const auto ns = static_cast<i64>(owner.size());
-        const bool atomic = threads > 1 && ns > kParallelMin;
-        fill_.assign(faces.size(), 0);
-        if (atomic)
-            parallel_for(threads, ns, [&](i64 i) {
-                std::atomic_ref<i32>(fill_[static_cast<std::size_t>(owner[static_cast<std::size_t>(i)])])
-                    .fetch_add(1, std::memory_order_relaxed);
-            });
-        else
-            for (const i32 t : owner) ++fill_[static_cast<std::size_t>(t)];
-        exclusive_scan(fill_, begin_);
+        group_by_key(threads, ns, static_cast<i64>(faces.size()),
+                     [&](i64 i) { return owner[static_cast<std::size_t>(i)]; }, begin_, source_, fill_);
         parallel_for(threads, static_cast<i64>(faces.size()), [&](i64 ti) {
             const auto t = static_cast<std::size_t>(ti);
             faces[t].samples_begin = begin_[t];
             faces[t].samples_end = begin_[t + 1];
-            fill_[t] = begin_[t];
         });
         sorted_point_.resize(point.size());
         sorted_owner_.resize(owner.size());
         sorted_far_.resize(far.size());
-        auto move = [&](std::size_t i, std::size_t at) {
+        parallel_for(threads, ns, [&](i64 ai) {
+            const auto at = static_cast<std::size_t>(ai);
+            const auto i = static_cast<std::size_t>(source_[at]);
             sorted_point_[at] = point[i];
             sorted_owner_[at] = owner[i];
             if (!far.empty()) sorted_far_[at] = far[i];
-        };
-        if (atomic) {
-            source_.resize(owner.size());
-            parallel_for(threads, ns, [&](i64 i) {
-                const i32 at = std::atomic_ref<i32>(fill_[static_cast<std::size_t>(owner[static_cast<std::size_t>(i)])])
-                                   .fetch_add(1, std::memory_order_relaxed);
-                source_[static_cast<std::size_t>(at)] = static_cast<i32>(i);
-            });
-            parallel_for(threads, static_cast<i64>(faces.size()), [&](i64 t) {
-                i32* const run = source_.data() + begin_[static_cast<std::size_t>(t)];
-                sort_short_run(run, source_.data() + begin_[static_cast<std::size_t>(t) + 1]);
-            });
-            parallel_for(threads, ns, [&](i64 at) {
-                move(static_cast<std::size_t>(source_[static_cast<std::size_t>(at)]), static_cast<std::size_t>(at));
-            });
-        } else {
-            for (std::size_t i = 0; i < owner.size(); ++i)
-                move(i, static_cast<std::size_t>(fill_[static_cast<std::size_t>(owner[i])]++));
-        }
+        });
         point.swap(sorted_point_);
         owner.swap(sorted_owner_);
         far.swap(sorted_far_);
@@ -561,39 +566,10 @@ enum FanProblem : u8 { kFanOk = 0, kEdgeCount, kEdgeDirection, kVertexFans };
 void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::vector<i32>& scratch_count,
                 std::vector<i32>& scratch_corner) {
     const i32 nv = s.vertices(), nt = s.triangles();
-    auto& count = scratch_count;
-    count.assign(static_cast<std::size_t>(nv), 0);
-    // Each vertex's corners: a counting sort, on several threads by atomic
-    // counters, which leave the corners of a vertex in any order; the
-    // ordering below sorts them back into triangle order first, so every
-    // count gives the fans (and, for bad input, the error) of one thread.
-    const i64 corners = 3 * static_cast<i64>(nt);
-    const bool atomic = threads > 1 && corners > kParallelMin;
-    if (atomic)
-        parallel_for(threads, corners, [&](i64 c) {
-            std::atomic_ref<i32>(count[static_cast<std::size_t>(s.tri[static_cast<std::size_t>(c)])])
-                .fetch_add(1, std::memory_order_relaxed);
-        });
-    else
-        for (i64 c = 0; c < corners; ++c) ++count[static_cast<std::size_t>(s.tri[static_cast<std::size_t>(c)])];
-    exclusive_scan(count, fans.off);
+    // Each vertex's corners, in triangle order.
     auto& corner = scratch_corner;
-    corner.resize(static_cast<std::size_t>(corners));
-    {
-        std::vector<i32>& fill = count;
-        parallel_for(threads, nv, [&](i64 v) { fill[static_cast<std::size_t>(v)] = fans.off[static_cast<std::size_t>(v)]; });
-        if (atomic)
-            parallel_for(threads, corners, [&](i64 c) {
-                const i32 v = s.tri[static_cast<std::size_t>(c)];
-                const i32 at = std::atomic_ref<i32>(fill[static_cast<std::size_t>(v)]).fetch_add(1, std::memory_order_relaxed);
-                corner[static_cast<std::size_t>(at)] = static_cast<i32>(c);
-            });
-        else
-            for (i64 c = 0; c < corners; ++c) {
-                const i32 v = s.tri[static_cast<std::size_t>(c)];
-                corner[static_cast<std::size_t>(fill[static_cast<std::size_t>(v)]++)] = static_cast<i32>(c);
-            }
-    }
+    group_by_key(threads, 3 * static_cast<i64>(nt), nv,
+                 [&](i64 c) { return s.tri[static_cast<std::size_t>(c)]; }, fans.off, corner, scratch_count);
     fans.face.resize(corner.size());
     fans.next.resize(corner.size());
     fans.prev.resize(corner.size());
@@ -622,10 +598,8 @@ void build_fans(const Surface& s, int threads, bool validate, Fans& fans, std::v
             succ = order + k;
             pred = succ + k;
         }
-        i32* const mine = corner.data() + o;
-        if (atomic) sort_short_run(mine, mine + k);
         for (i32 i = 0; i < k; ++i) {
-            const i32 c = mine[i];
+            const i32 c = corner[static_cast<std::size_t>(o + i)];
             const i32 tri = c / 3, r = c % 3;
             t[i] = tri;
             a[i] = s.tri[static_cast<std::size_t>(3 * tri + (r + 1) % 3)];
