@@ -1,0 +1,248 @@
+// The host backend of the data-parallel drivers (reduction's rounds): arrays
+// in host memory and OpenMP primitives (parallel.hpp). The CUDA backend
+// (exec_cuda.cuh) offers the same members over device memory; a driver
+// written against them runs on either, calling the same per-element
+// functions, so the two give the same bytes wherever the primitives do (every
+// primitive here has one result for any thread count or device: integer
+// sums, stable orders).
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <new>
+#include <utility>
+#include <vector>
+
+#include "parallel.hpp"
+
+namespace tetiso {
+
+// std::allocator that leaves trivially constructible elements uninitialised
+// on resize: the drivers size an array and then write every element, so the
+// zero fill would be a second pass over it.
+template <class T>
+struct NoInitAllocator : std::allocator<T> {
+    template <class U>
+    struct rebind {
+        using other = NoInitAllocator<U>;
+    };
+    NoInitAllocator() = default;
+    template <class U>
+    NoInitAllocator(const NoInitAllocator<U>&) noexcept {}
+    template <class U>
+    void construct(U* at) noexcept(std::is_nothrow_default_constructible_v<U>) {
+        ::new (static_cast<void*>(at)) U;
+    }
+    template <class U, class... Args>
+    void construct(U* at, Args&&... args) {
+        ::new (static_cast<void*>(at)) U(std::forward<Args>(args)...);
+    }
+};
+
+struct HostExec {
+    using i32 = std::int32_t;
+    using i64 = std::int64_t;
+    using Grain = parallel::Grain;
+    static constexpr bool kHost = true;
+
+    template <class T>
+    using Array = std::vector<T, NoInitAllocator<T>>;
+
+    int threads = 1;
+
+    template <class Function>
+    void for_each(i64 n, const Function& function, Grain grain = Grain::kCheap) const {
+        parallel::for_each(threads, n, grain, function);
+    }
+
+    // out = every i < n with keep(i), ascending; returns their number.
+    template <class Keep>
+    i32 filter(i64 n, const Keep& keep, Array<i32>& out) const {
+        out.resize(static_cast<std::size_t>(n));
+        const i32 kept = parallel::filter(threads, n, keep, out.data());
+        out.resize(static_cast<std::size_t>(kept));
+        return kept;
+    }
+
+    // The elements of `in` (n of them) at which keep(i) holds, in order.
+    template <class T, class Keep>
+    i32 copy_if(const Array<T>& in, i64 n, const Keep& keep, Array<T>& out) const {
+        out.resize(static_cast<std::size_t>(n));
+        i32 kept = 0;
+        if (!parallel::Blocks(threads, n).parallel()) {
+            for (i64 i = 0; i < n; ++i)
+                if (keep(i)) out[static_cast<std::size_t>(kept++)] = in[static_cast<std::size_t>(i)];
+        } else {
+            Array<i32> at(static_cast<std::size_t>(n));
+            kept = parallel::rank(threads, n, keep, at.data());
+            parallel::for_each(threads, n, [&](i64 i) {
+                const i32 r = at[static_cast<std::size_t>(i)];
+                if (r >= 0) out[static_cast<std::size_t>(r)] = in[static_cast<std::size_t>(i)];
+            });
+        }
+        out.resize(static_cast<std::size_t>(kept));
+        return kept;
+    }
+
+    // rank[i] = the number of kept elements before i, for each kept i, -1
+    // for the others; returns the number kept.
+    template <class Keep>
+    i32 rank(i64 n, const Keep& keep, Array<i32>& rank) const {
+        rank.resize(static_cast<std::size_t>(n));
+        return parallel::rank(threads, n, keep, rank.data());
+    }
+
+    template <class Counted>
+    i64 count(i64 n, const Counted& counted) const {
+        return parallel::count(threads, n, counted);
+    }
+
+    // offsets[i] = counts[0] + ... + counts[i-1] for i <= n; returns the sum.
+    i32 exclusive_scan(const Array<i32>& counts, i64 n, Array<i32>& offsets) const {
+        offsets.resize(static_cast<std::size_t>(n) + 1);
+        parallel::exclusive_scan(counts.data(), n, offsets.data());
+        return offsets[static_cast<std::size_t>(n)];
+    }
+
+    // A stable grouping of 0 .. n-1 by key(i) < groups (parallel.hpp).
+    template <class Key>
+    void group_by_key(i64 n, i64 groups, const Key& key, Array<i32>& first, Array<i32>& order,
+                      Array<i32>& scratch) const {
+        first.resize(static_cast<std::size_t>(groups) + 1);
+        order.resize(static_cast<std::size_t>(n));
+        scratch.resize(static_cast<std::size_t>(groups));
+        parallel::group_by_key(threads, n, groups, key, first.data(), order.data(), scratch.data());
+    }
+
+    // order = ops (n edge ids) by descending priority, ties by descending
+    // first end, then by descending second end (vertex indices, which follow
+    // the keys). A stable LSD radix sort of the complemented priorities,
+    // skipping the digits all share, then each run of equal priorities in
+    // that order. On one thread, digits of 16 bits for large rounds (two
+    // passes) and of 8 for small ones, where clearing and scanning
+    // 65,536-entry counters cost more than the sort (5 % of a job's profile
+    // with 30^3-cell domains, whose late rounds have tens of operations). On
+    // several, each thread counts and scatters its own block of the keys,
+    // with 11-bit digits so that the per-block counters stay small and their
+    // scan cheap; every stable sort by the same key gives the same order.
+    void order_by_priority(const Array<i32>& ops, i64 n, const std::uint32_t* priority, const i32* v0, const i32* v1,
+                           Array<i32>& order) {
+        if (n < (i64{1} << 14)) radix_order<8>(ops, n, priority, order, 1);
+        else if (threads > 1 && n >= kParallelSortMin) radix_order<11>(ops, n, priority, order, threads);
+        else radix_order<16>(ops, n, priority, order, 1);
+        const auto before = [&](i32 a, i32 b) {
+            const auto ia = static_cast<std::size_t>(a), ib = static_cast<std::size_t>(b);
+            return v0[ia] != v0[ib] ? v0[ia] > v0[ib] : v1[ia] > v1[ib];
+        };
+        const std::size_t size = static_cast<std::size_t>(n);
+        for (std::size_t i = 0; i + 1 < size;) {
+            std::size_t j = i + 1;
+            while (j < size && sort_key_[j] == sort_key_[i]) ++j;
+            if (j - i > 1)
+                std::sort(order.begin() + static_cast<std::ptrdiff_t>(i), order.begin() + static_cast<std::ptrdiff_t>(j),
+                          before);
+            i = j;
+        }
+    }
+
+    // The reservations' window (reduce/selection.hpp): at least 512
+    // operations, or 1/32 of the round's, so that a round takes some tens of
+    // steps, each three parallel loops.
+    static i64 reservation_window(i64 n) { return std::max<i64>(512, n / 32); }
+
+    template <class T>
+    void assign(Array<T>& a, i64 n, T value) const {
+        a.resize(static_cast<std::size_t>(n));
+        T* data = a.data();
+        for_each(n, [=](i64 i) { data[i] = value; });
+    }
+
+    template <class T>
+    T get(const Array<T>& a, i64 i) const {
+        return a[static_cast<std::size_t>(i)];
+    }
+    template <class T>
+    void set(Array<T>& a, i64 i, T value) const {
+        a[static_cast<std::size_t>(i)] = value;
+    }
+
+    template <class T, class Allocator>
+    void upload(const std::vector<T, Allocator>& host, Array<T>& a) const {
+        a.assign(host.begin(), host.end());
+    }
+    template <class T, class Allocator>
+    void download(const Array<T>& a, i64 n, std::vector<T, Allocator>& host) const {
+        host.assign(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(n));
+    }
+
+    void sync() const {}
+
+private:
+    // From this many operations a sort by priority runs on several threads
+    // (below it, one thread sorts in a millisecond or less).
+    static constexpr i64 kParallelSortMin = i64{1} << 16;
+
+    // blocks: the number of blocks, each counted and scattered by one
+    // iteration of a parallel loop; 1 sorts on the calling thread.
+    template <int kDigitBits>
+    void radix_order(const Array<i32>& ops, i64 count, const std::uint32_t* priority, Array<i32>& order, int blocks_in) {
+        using u32 = std::uint32_t;
+        const std::size_t n = static_cast<std::size_t>(count);
+        Array<u32>& key = sort_key_;
+        key.resize(n);
+        sort_key_spare_.resize(n);
+        order.resize(n);
+        order_spare_.resize(n);
+        if (n == 0) return;
+        parallel::for_each(blocks_in, count, [&](i64 i) {
+            const auto k = static_cast<std::size_t>(i);
+            order[k] = ops[k];
+            key[k] = ~priority[static_cast<std::size_t>(ops[k])];
+        });
+        const auto blocks = static_cast<std::size_t>(blocks_in);
+        const auto block_begin = [&](std::size_t b) { return n * b / blocks; };
+        constexpr int kDigits = (32 + kDigitBits - 1) / kDigitBits;
+        constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
+        histogram_.resize(blocks * kBuckets);
+        u32* histogram = histogram_.data();
+        for (int d = 0; d < kDigits; ++d) {
+            const int shift = d * kDigitBits;
+            const auto digit = [&](u32 k) { return (k >> shift) & (kBuckets - 1); };
+            parallel::for_each(blocks_in, static_cast<i64>(blocks), [&](i64 b) {
+                u32* c = histogram + static_cast<std::size_t>(b) * kBuckets;
+                std::fill(c, c + kBuckets, 0u);
+                for (std::size_t i = block_begin(static_cast<std::size_t>(b)); i < block_begin(static_cast<std::size_t>(b) + 1); ++i)
+                    ++c[digit(key[i])];
+            }, 0);
+            std::size_t shared = 0;
+            for (std::size_t b = 0; b < blocks; ++b) shared += histogram[b * kBuckets + digit(key[0])];
+            if (shared == n) continue;
+            // Offsets in bucket order and, within a bucket, block order: the
+            // scatter keeps the keys' order among equal digits (stable).
+            u32 sum = 0;
+            for (std::size_t bucket = 0; bucket < kBuckets; ++bucket)
+                for (std::size_t b = 0; b < blocks; ++b) {
+                    const u32 here = histogram[b * kBuckets + bucket];
+                    histogram[b * kBuckets + bucket] = sum;
+                    sum += here;
+                }
+            parallel::for_each(blocks_in, static_cast<i64>(blocks), [&](i64 b) {
+                u32* c = histogram + static_cast<std::size_t>(b) * kBuckets;
+                for (std::size_t i = block_begin(static_cast<std::size_t>(b)); i < block_begin(static_cast<std::size_t>(b) + 1); ++i) {
+                    const u32 at = c[digit(key[i])]++;
+                    sort_key_spare_[at] = key[i];
+                    order_spare_[at] = order[i];
+                }
+            }, 0);
+            key.swap(sort_key_spare_);
+            order.swap(order_spare_);
+        }
+    }
+
+    Array<std::uint32_t> sort_key_, sort_key_spare_, histogram_;
+    Array<i32> order_spare_;
+};
+
+} // namespace tetiso

@@ -1,0 +1,329 @@
+// The reduction's round driver (reduce.hpp), written once against the
+// execution backends: the host's OpenMP primitives (exec_host.hpp) and
+// CUDA's (exec_cuda.cuh) run the same steps over the same per-element
+// functions, so a reduction gives the same bytes on either. One round, each
+// step a data-parallel pass over flat arrays (vertex, edge or triangle index
+// → values):
+//   1. fans:      vertex → its triangles in counter-clockwise order
+//                 (adjacency.hpp; the first round validates the input);
+//   2. edges:     one record per undirected edge, owned by its smaller end;
+//   3. geometry:  unit normal and quality of every triangle; the error
+//                 samples sorted by owner (error_bound.hpp); the cones
+//                 (legality.hpp);
+//   4. classify:  per edge, the collapse branch that applies and the
+//                 priority (criterion.hpp), or skipped as quiet (apply.hpp);
+//   5. select:    the independent set in priority order (selection.hpp); Φ,
+//                 the position and the legality tests are computed here,
+//                 only for what could still be chosen; then the flips;
+//   6. apply:     the chosen operations touch disjoint triangles and
+//                 vertices (apply.hpp);
+//   7. compact:   drop removed vertices and triangles, keeping their order
+//                 (so vertex keys stay sorted).
+// Rounds repeat until no candidate is left, two rounds in a row collapse
+// nothing, or max_rounds is reached. Every per-element computation depends
+// on that element's inputs only and no floating-point value is ever summed
+// across elements, so the output is the same for any thread count and
+// device.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+#include "../hd.hpp"
+#include "adjacency.hpp"
+#include "apply.hpp"
+#include "criterion.hpp"
+#include "error_bound.hpp"
+#include "legality.hpp"
+#include "round_view.hpp"
+#include "selection.hpp"
+#include "tetiso/mesh.hpp"
+#include "tetiso/reduce.hpp"
+
+namespace tetiso::reduction {
+
+// Every array of a reduction, kept from round to round and, on the device,
+// from one reduction to the next (a worker's GPU reduces domain after domain
+// without allocating).
+template <class Exec>
+struct ReductionState {
+    template <class T>
+    using Array = typename Exec::template Array<T>;
+    Surface<Exec> s;
+    Fans<Exec> fans;
+    Edges<Exec> edges;
+    Array<FaceGeometry> geometry;
+    Array<Cone> cones;
+    Array<u8> kind;
+    Array<u32> priority;
+    Array<float> px, py, pz, err;
+    Array<i32> survivor;
+    Array<u8> chosen, refused, changed;
+    Array<u32> refused_slots;
+    Array<i32> candidates, flips, offered, to_move, scratch, rank, list, first, order;
+    Samples<Exec> samples;
+    Selection<Exec> selection;
+    Compaction<Exec> compaction;
+    HandedOn<Exec> handed_on;
+
+    OpsView ops() {
+        return {kind.data(), priority.data(), px.data(), py.data(), pz.data(), err.data(), survivor.data()};
+    }
+};
+
+inline Params make_params(const ReduceOptions& o) {
+    return {o.phi,
+            std::sin(o.min_angle_degrees * hd::kPi / 180.0),
+            std::cos(o.max_normal_turn_degrees * hd::kPi / 180.0),
+            std::cos(o.flip_max_dihedral_degrees * hd::kPi / 180.0),
+            o.max_error,
+            o.short_edge_ratio,
+            o.flips};
+}
+
+// The most threads a round uses, whatever it is offered: the most measured.
+// A round is a dozen short parallel loops with a join after each; with every
+// one of them parallel, sixteen threads were as fast as eight or faster at
+// every size on the 16-core device, from an 84 K-triangle gyroid surface
+// (0.195 against 0.227 s, medians of 3) to the 1.64 M-triangle paper surface
+// at N = 100 (2.44 against 3.72 s).
+constexpr int kMaxRoundThreads = 16;
+
+// Loads a piece (checked by the caller) into the state: its surface and,
+// with an error bound, its samples.
+template <class Exec>
+void load_piece(Exec& exec, const Piece& in, bool bounded, ReductionState<Exec>& st) {
+    const std::size_t nv = in.vertex_count(), nt = in.triangle_count();
+    std::vector<float> xyz(3 * nv);
+    for (std::size_t v = 0; v < nv; ++v) {
+        xyz[3 * v] = in.x[v];
+        xyz[3 * v + 1] = in.y[v];
+        xyz[3 * v + 2] = in.z[v];
+    }
+    Surface<Exec>& s = st.s;
+    exec.upload(xyz, s.xyz);
+    exec.upload(in.key, s.key);
+    if (in.flags.empty()) exec.assign(s.flags, static_cast<i64>(nv), u8{0});
+    else exec.upload(in.flags, s.flags);
+    exec.upload(in.triangles, s.tri);
+    if (in.error.empty()) exec.assign(s.err, static_cast<i64>(nt), 0.0f);
+    else exec.upload(in.error, s.err);
+    s.nv = static_cast<i32>(nv);
+    s.nt = static_cast<i32>(nt);
+    st.samples.on = false;
+    if (!bounded) return;
+    if (in.error.empty()) {
+        build_raw_samples(exec, s.view(), st.samples, st.scratch, st.rank);
+        return;
+    }
+    const HostSamples h = samples_of_reduced_input(in);
+    exec.upload(h.point, st.samples.point);
+    exec.upload(h.owner, st.samples.owner);
+    exec.upload(h.far, st.samples.far);
+    exec.upload(h.far_point, st.samples.far_point);
+    st.samples.count = static_cast<i32>(h.point.size());
+    st.samples.on = true;
+}
+
+// The rounds. threads: what the host may use to begin with (options.
+// more_threads may offer more before each round); the device ignores it.
+template <class Exec>
+void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& options, int threads_available,
+                ReduceReport& rep) {
+    using clock = std::chrono::steady_clock;
+    const Params params = make_params(options);
+    Surface<Exec>& s = st.s;
+    exec.assign(st.changed, s.nv, u8{0});
+    exec.assign(st.refused_slots, s.nv, u32{0});
+    ReduceStageSeconds& seconds = rep.stages;
+    auto since = [&](clock::time_point t) {
+        exec.sync();
+        return std::chrono::duration<double>(clock::now() - t).count();
+    };
+    int idle_rounds = 0;
+    for (int round = 0;; ++round) {
+        if constexpr (Exec::kHost) {
+            if (options.more_threads)
+                if (const int offered = options.more_threads(); offered > 0) threads_available = offered;
+            exec.threads = std::min(threads_available, kMaxRoundThreads);
+        }
+        const auto round_start = clock::now();
+        auto t0 = round_start;
+        build_fans(exec, s, round == 0, st.fans);
+        seconds.fans += since(t0);
+        if (round >= options.max_rounds) break;
+        t0 = clock::now();
+        const FansView fans = st.fans.view();
+        build_edges(exec, fans, s.nv, st.edges);
+        seconds.edges += since(t0);
+        t0 = clock::now();
+        build_geometry(exec, s.view(), st.geometry);
+        seconds.geometry += since(t0);
+        t0 = clock::now();
+        const i32 ne = st.edges.n;
+        const auto edge_count = static_cast<std::size_t>(ne);
+        for (auto* a : {&st.px, &st.py, &st.pz, &st.err}) a->resize(edge_count);
+        st.kind.resize(edge_count);
+        st.priority.resize(edge_count);
+        st.survivor.resize(edge_count);
+        exec.assign(st.refused, ne, u8{0});
+        if (st.samples.on) st.samples.sort(exec, st.geometry, s.nt);
+        build_cones(exec, s.view(), fans, st.geometry.data(), st.cones);
+        const EdgesView edges = st.edges.view();
+        const RoundView m{s.view(), fans, edges, st.geometry.data(), st.cones.data(), st.samples.view(), params, round};
+        const OpsView ops = st.ops();
+        {
+            const u32* refused_slots = st.refused_slots.data();
+            const u8* changed = st.changed.data();
+            exec.for_each(ne, [=] TETISO_HD(i64 ei) {
+                const i32 e = static_cast<i32>(ei);
+                if (known_refused(refused_slots, edges, e) && unchanged(fans, edges, changed, e)) ops.kind[e] = kQuiet;
+                else classify(m, e, ops);
+            });
+        }
+        exec.assign(st.chosen, ne, u8{0});
+        const u8* kind = st.kind.data();
+        const i32 candidates = exec.filter(ne, [=] TETISO_HD(i64 e) {
+            return kind[e] == kPending || kind[e] == kCollapse;
+        }, st.candidates);
+        seconds.propose += since(t0);
+        ReduceRound stats;
+        stats.round = round;
+        stats.vertices = static_cast<std::size_t>(s.nv);
+        stats.triangles = static_cast<std::size_t>(s.nt);
+        t0 = clock::now();
+
+        // Collapses. The selection places a pending collapse (Φ, position)
+        // only when it reaches it unblocked: most are blocked by a chosen
+        // neighbour and never need their Φ this round.
+        u8* chosen = st.chosen.data();
+        u8* refused = st.refused.data();
+        Selection<Exec>& sel = st.selection;
+        exec.assign(sel.claimed, s.nv, i32{0});
+        sel.stamp = 0;
+        const SelectView select_view{fans, edges, st.cones.data(), sel.claimed.data(), 0};
+        i32* owner = st.samples.on ? st.samples.owner.data() : nullptr;
+        choose<false>(exec, sel, select_view, st.candidates, candidates, s.nv, st.priority.data(), chosen, refused,
+                      CollapseTest{m, ops, owner});
+        // Flips: for the interior edges with no collapse that no chosen
+        // collapse blocks. refused[e] (set by the selection for a collapse
+        // found impossible or illegal) ends as "no operation is possible on
+        // e", the answer refused_slots keeps; a blocked edge's answer is
+        // unknown.
+        claim_chosen(exec, sel, select_view, st.candidates, candidates, chosen);
+        const bool flips_on = params.flips;
+        exec.for_each(ne, [=] TETISO_HD(i64 ei) {
+            const i32 e = static_cast<i32>(ei);
+            if (kind[e] == kNone) refused[e] = !flips_on || edges.border(fans, e);
+        });
+        SelectView clear_view = select_view;
+        clear_view.stamp = sel.stamp;
+        const i32 offered = exec.filter(ne, [=] TETISO_HD(i64 ei) {
+            const i32 e = static_cast<i32>(ei);
+            return kind[e] == kNone && !refused[e] && clear_view.free(edges.v0[e]) && clear_view.free(edges.v1[e]);
+        }, st.offered);
+        {
+            const i32* list = st.offered.data();
+            exec.for_each(offered, [=] TETISO_HD(i64 k) {
+                const i32 e = list[k];
+                if (!propose_flip(m, e, ops)) refused[e] = 1;
+            });
+        }
+        std::size_t evaluated = static_cast<std::size_t>(offered);
+        const i32 flips = exec.copy_if(st.offered, offered, [=, list = st.offered.data()] TETISO_HD(i64 k) {
+            return kind[list[k]] == kFlip;
+        }, st.flips);
+        choose<true>(exec, sel, clear_view, st.flips, flips, s.nv, st.priority.data(), chosen, refused, FlipTest{});
+        {
+            u32* refused_slots = st.refused_slots.data();
+            exec.for_each(s.nv, [=] TETISO_HD(i64 v) {
+                refused_slots[v] = refused_mask(edges, kind, refused, static_cast<i32>(v));
+            });
+        }
+        {
+            const i32* list = st.candidates.data();
+            evaluated += static_cast<std::size_t>(
+                exec.count(candidates, [=] TETISO_HD(i64 k) { return kind[list[k]] != kPending; }));
+        }
+        stats.candidates = static_cast<std::size_t>(candidates) + static_cast<std::size_t>(flips);
+        stats.evaluated = evaluated;
+        seconds.select += since(t0);
+        t0 = clock::now();
+
+        // Samples still to move: those of the flips (a collapse's test moved
+        // its samples when it was chosen).
+        stats.collapses = static_cast<std::size_t>(
+            exec.count(ne, [=] TETISO_HD(i64 e) { return chosen[e] && kind[e] == kCollapse; }));
+        stats.flips = static_cast<std::size_t>(
+            exec.filter(ne, [=] TETISO_HD(i64 e) { return chosen[e] && kind[e] == kFlip; }, st.to_move));
+        if (stats.collapses == 0 && stats.flips == 0) { // the next round would find what this one did
+            stats.seconds = since(round_start);
+            rep.rounds.push_back(stats);
+            break;
+        }
+        // The samples move first: they are placed on the new faces by reading
+        // the fans and positions that their legality test read. Each move
+        // costs about what a legality test does.
+        if (st.samples.on) {
+            const i32* list = st.to_move.data();
+            exec.for_each(static_cast<i64>(stats.flips), [=] TETISO_HD(i64 k) { move_flip_samples(m, list[k], owner); },
+                          Exec::Grain::kTests);
+        }
+        Compaction<Exec>& c = st.compaction;
+        exec.assign(c.vertex_alive, s.nv, u8{1});
+        exec.assign(c.triangle_alive, s.nt, u8{1});
+        exec.assign(st.changed, s.nv, u8{0});
+        const ApplyView applied{c.vertex_alive.data(), c.triangle_alive.data(), st.changed.data()};
+        const SurfaceView surface = s.view();
+        exec.for_each(ne, [=] TETISO_HD(i64 e) {
+            if (chosen[e]) apply_operation(surface, fans, edges, ops, applied, static_cast<i32>(e));
+        });
+        stats.changed_vertices = static_cast<std::size_t>(exec.count(s.nv, [=] TETISO_HD(i64 v) {
+            return (applied.changed[v] & applied.vertex_alive[v]) != 0;
+        }));
+        seconds.apply += since(t0);
+        t0 = clock::now();
+        if (stats.collapses > 0)
+            compact(exec, s, c, st.changed, st.refused_slots, owner, st.samples.on ? st.samples.count : 0);
+        seconds.compact += since(t0);
+        stats.seconds = since(round_start);
+        rep.rounds.push_back(stats);
+        idle_rounds = stats.collapses == 0 ? idle_rounds + 1 : 0;
+        if (idle_rounds >= 2) break;
+    }
+}
+
+// The reduced surface, and with keep_samples the samples handed on.
+template <class Exec>
+Piece unload_piece(Exec& exec, ReductionState<Exec>& st, bool keep_samples) {
+    Surface<Exec>& s = st.s;
+    Piece out;
+    const auto nv = static_cast<std::size_t>(s.nv);
+    std::vector<float> xyz;
+    exec.download(s.xyz, 3 * static_cast<i64>(nv), xyz);
+    out.x.resize(nv);
+    out.y.resize(nv);
+    out.z.resize(nv);
+    for (std::size_t v = 0; v < nv; ++v) {
+        out.x[v] = xyz[3 * v];
+        out.y[v] = xyz[3 * v + 1];
+        out.z[v] = xyz[3 * v + 2];
+    }
+    exec.download(s.key, s.nv, out.key);
+    exec.download(s.flags, s.nv, out.flags);
+    exec.download(s.tri, 3 * static_cast<i64>(s.nt), out.triangles);
+    exec.download(s.err, s.nt, out.error);
+    if (keep_samples && st.samples.on) {
+        HandedOn<Exec>& h = st.handed_on;
+        hand_on(exec, st.samples, s.nt, h, st.list, st.first, st.order, st.scratch);
+        exec.download(h.xyz, 3 * static_cast<i64>(h.count), out.sample_xyz);
+        exec.download(h.triangle, h.count, out.sample_triangle);
+        exec.download(h.sampled, s.nt, out.sampled);
+    }
+    return out;
+}
+
+} // namespace tetiso::reduction
