@@ -34,7 +34,7 @@
 
 #include "bench_main.hpp"
 #include "tetiso/extract.hpp"
-#include "tetiso/extract_gpu.hpp"
+#include "tetiso/gpu.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/mesh.hpp"
@@ -100,8 +100,8 @@ void bench_tetiso(benchmark::State& state, std::int64_t n, int threads) {
 }
 
 // One GPU for every case: its buffers outlive a case, as in a worker.
-tetiso::GpuExtractor& gpu_extractor() {
-    static tetiso::GpuExtractor gpu;
+tetiso::Gpu& gpu_extractor() {
+    static tetiso::Gpu gpu;
     return gpu;
 }
 
@@ -109,9 +109,9 @@ tetiso::GpuExtractor& gpu_extractor() {
 // seconds of the call's three stages.
 template <class Extract>
 void time_gpu(benchmark::State& state, const tetiso::Domain& domain, const Extract& extract) {
-    tetiso::GpuExtractor& gpu = gpu_extractor();
+    tetiso::Gpu& gpu = gpu_extractor();
     std::int64_t vertices = 0, triangles = 0;
-    tetiso::GpuExtractTimings sum;
+    tetiso::GpuTimings sum;
     for (auto _ : state) {
         const tetiso::Piece piece = extract(gpu);
         vertices = static_cast<std::int64_t>(piece.vertex_count());
@@ -130,15 +130,15 @@ void time_gpu(benchmark::State& state, const tetiso::Domain& domain, const Extra
 
 void bench_gpu(benchmark::State& state, std::int64_t n) {
     const Problem& p = problem(n);
-    time_gpu(state, p.domain, [&](tetiso::GpuExtractor& gpu) { return gpu.extract(p.domain, kLevel); });
+    time_gpu(state, p.domain, [&](tetiso::Gpu& gpu) { return gpu.extract(p.domain, kLevel); });
 }
 
 void bench_gpu_lattice(benchmark::State& state, std::int64_t n) {
     const Problem& p = problem(n);
     const tetiso::Lattice lattice(n);
     const tetiso::Decomposition one(lattice, 1);
-    const std::vector<float> values = one.field_values(0, *tetiso::make_field("paper"));
-    time_gpu(state, p.domain, [&](tetiso::GpuExtractor& gpu) { return gpu.extract(one, 0, values, kLevel); });
+    const auto field = tetiso::make_field("paper");
+    time_gpu(state, p.domain, [&](tetiso::Gpu& gpu) { return gpu.extract(one, 0, *field, kLevel); });
 }
 
 // A domain from nothing to its piece, as a job's domain task makes it.
@@ -149,7 +149,7 @@ void bench_domain(benchmark::State& state, std::int64_t n, bool on_gpu) {
     const auto field = tetiso::make_field("paper");
     std::int64_t vertices = 0, triangles = 0;
     for (auto _ : state) {
-        const tetiso::Piece piece = on_gpu ? gpu_extractor().extract(one, 0, one.field_values(0, *field), kLevel)
+        const tetiso::Piece piece = on_gpu ? gpu_extractor().extract(one, 0, *field, kLevel)
                                            : tetiso::extract(one.make_domain(0, *field), kLevel);
         vertices = static_cast<std::int64_t>(piece.vertex_count());
         triangles = static_cast<std::int64_t>(piece.triangle_count());

@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "tetiso/gpu.hpp"
 #include "tetiso/reduce.hpp"
 
 namespace tetiso::cli {
@@ -24,6 +25,22 @@ void add_split_command(CLI::App& app, Command& run);
 // --phi, shared by every command that reduces.
 void add_phi_option(CLI::App& cmd, double& phi);
 
+// --device cpu|gpu and --gpu N, shared by the commands that can run on a GPU.
+struct DeviceChoice {
+    std::string device = "cpu";
+    int gpu = 0;
+    bool on_gpu() const { return device == "gpu"; }
+};
+// what: the work that runs there, for the help text.
+void add_device_options(CLI::App& cmd, DeviceChoice& choice, const std::string& what);
+
+// The GPU asked for, or null for the CPU; throws tetiso::Error ("--device
+// gpu: why not") when there is none.
+std::unique_ptr<Gpu> open_gpu(const DeviceChoice& choice);
+
+// The report's "device": the CPU, or the GPU's name and its seconds by stage.
+nlohmann::json device_json(const Gpu* gpu, const GpuTimings& seconds);
+
 // The default error bound of a reduction that knows no lattice spacing, as a
 // fraction of the input's mean edge length.
 inline constexpr double kAutoErrorPerEdgeLength = 0.4;
@@ -31,7 +48,7 @@ double mean_edge_length(const Piece& piece);
 nlohmann::json reduce_json(const ReduceReport& report);
 
 // Fails early, before any work, if `path` cannot be created: its directory
-// must exist and be writable, and its extension known to `kind`.
+// must exist and be writable, and it must not be a directory.
 void require_writable(const std::filesystem::path& path);
 
 // Writes a JSON report atomically (never a half-written file).

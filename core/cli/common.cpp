@@ -31,6 +31,36 @@ void write_report(const nlohmann::json& report, const std::filesystem::path& pat
     });
 }
 
+void add_device_options(CLI::App& cmd, DeviceChoice& choice, const std::string& what) {
+    cmd.add_option("--device", choice.device,
+                   "Where " + what + " run: cpu, or gpu (CUDA; the same bytes either way)")
+        ->check(CLI::IsMember({"cpu", "gpu"}))
+        ->capture_default_str();
+    cmd.add_option("--gpu", choice.gpu, "With --device gpu: which CUDA device (0-based, after CUDA_VISIBLE_DEVICES)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+}
+
+std::unique_ptr<Gpu> open_gpu(const DeviceChoice& choice) {
+    if (!choice.on_gpu()) return nullptr;
+    const GpuInfo info = gpu_info(choice.gpu);
+    if (!info.available) throw Error("--device gpu: " + info.description);
+    return std::make_unique<Gpu>(choice.gpu);
+}
+
+nlohmann::json device_json(const Gpu* gpu, const GpuTimings& seconds) {
+    if (!gpu) return {{"kind", "cpu"}};
+    return {{"kind", "gpu"},
+            {"index", gpu->device()},
+            {"name", gpu->description()},
+            {"seconds",
+             {{"upload", seconds.upload},
+              {"compute", seconds.compute},
+              {"download", seconds.download},
+              {"extract", seconds.extract},
+              {"reduce", seconds.reduce}}}};
+}
+
 double now_seconds() {
     using clock = std::chrono::steady_clock;
     return std::chrono::duration<double>(clock::now().time_since_epoch()).count();

@@ -9,7 +9,7 @@
 #include "commands.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
-#include "tetiso/extract_gpu.hpp"
+#include "tetiso/gpu.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/io.hpp"
 #include "tetiso/lattice.hpp"
@@ -28,7 +28,7 @@ struct ExtractArguments {
     std::string field = "paper";
     std::optional<double> level;
     int threads = 1;
-    std::string device = "cpu"; // where the marching tetrahedra run: cpu or gpu
+    DeviceChoice device; // where the marching tetrahedra and the reduction run
     bool reduce = false;
     ReduceOptions reduce_options;
     double max_error_spacings = 0.25;
@@ -36,51 +36,46 @@ struct ExtractArguments {
     std::filesystem::path report;
 };
 
-// Extracts on the CPU or, with --device gpu, on one GPU kept for every
-// domain; counts the GPU's seconds by stage for the report.
+// Extracts and reduces on the CPU or, with --device gpu, on one GPU kept
+// for every domain; sums the GPU's seconds by stage for the report.
 class Extractor {
 public:
-    explicit Extractor(const ExtractArguments& args) : threads_(args.threads) {
-        if (args.device == "gpu") {
-            const GpuInfo info = gpu_info();
-            if (!info.available) throw Error("--device gpu: " + info.description);
-            gpu_ = std::make_unique<GpuExtractor>();
-            description_ = info.description;
-        }
-    }
-
-    bool on_gpu() const { return gpu_ != nullptr; }
+    explicit Extractor(const ExtractArguments& args) : threads_(args.threads), gpu_(open_gpu(args.device)) {}
 
     Piece operator()(const Domain& domain, float level) {
         if (!gpu_) return extract(domain, level, ExtractOptions{threads_});
         return count(gpu_->extract(domain, level));
     }
 
-    // A lattice domain on the GPU, which builds all but its values.
-    Piece operator()(const Decomposition& decomposition, int domain, const std::vector<float>& values, float level) {
-        return count(gpu_->extract(decomposition, domain, values, level));
+    // A lattice domain on the GPU, which builds it itself (and evaluates a
+    // built-in field there).
+    Piece operator()(const Decomposition& decomposition, int domain, const Field& field, float level) {
+        return count(gpu_->extract(decomposition, domain, field, level));
     }
 
-    nlohmann::json json() const {
-        if (!gpu_) return {{"kind", "cpu"}};
-        return {{"kind", "gpu"},
-                {"name", description_},
-                {"seconds", {{"upload", upload_}, {"compute", compute_}, {"download", download_}}}};
+    Piece reduce(const Piece& surface, const ReduceOptions& options, ReduceReport& report) {
+        if (!gpu_) return tetiso::reduce(surface, options, &report);
+        return count(gpu_->reduce(surface, options, &report));
     }
+
+    bool on_gpu() const { return gpu_ != nullptr; }
+
+    nlohmann::json json() const { return device_json(gpu_.get(), totals_); }
 
 private:
     Piece count(Piece piece) {
-        const GpuExtractTimings& t = gpu_->last_timings();
-        upload_ += t.upload;
-        compute_ += t.compute;
-        download_ += t.download;
+        const GpuTimings& t = gpu_->last_timings();
+        totals_.upload += t.upload;
+        totals_.compute += t.compute;
+        totals_.download += t.download;
+        totals_.extract += t.extract;
+        totals_.reduce += t.reduce;
         return piece;
     }
 
     int threads_;
-    std::unique_ptr<GpuExtractor> gpu_;
-    std::string description_;
-    double upload_ = 0.0, compute_ = 0.0, download_ = 0.0;
+    std::unique_ptr<Gpu> gpu_;
+    GpuTimings totals_;
 };
 
 void report_empty(double level, float lowest, float highest) {
@@ -106,7 +101,7 @@ void run_extract_mesh(const ExtractArguments& args, const Field& field, double s
         ReduceOptions options = args.reduce_options;
         options.threads = args.threads;
         options.max_error = args.max_error_spacings * spacing;
-        surface = tetiso::reduce(surface, options, &reduce_report);
+        surface = extractor.reduce(surface, options, reduce_report);
     }
     const double t3 = now_seconds();
     write_piece(surface, args.output);
@@ -162,16 +157,18 @@ void run_extract(const ExtractArguments& args) {
     float lowest = std::numeric_limits<float>::infinity(), highest = -lowest;
     std::vector<Piece> pieces;
     pieces.reserve(static_cast<std::size_t>(args.domains));
+    bool range_known = true;
     for (int d = 0; d < decomposition.domain_count(); ++d) {
         const double t0 = now_seconds();
-        // On the GPU only the field values are made here (the device builds
-        // the rest); on the CPU the whole domain.
-        Domain domain;
-        if (extractor.on_gpu()) domain.f = decomposition.field_values(d, *field);
-        else domain = decomposition.make_domain(d, *field);
+        if (extractor.on_gpu()) { // the GPU builds the domain itself
+            pieces.push_back(extractor(decomposition, d, *field, static_cast<float>(level)));
+            extract_seconds += now_seconds() - t0;
+            range_known = false;
+            continue;
+        }
+        const Domain domain = decomposition.make_domain(d, *field);
         const double t1 = now_seconds();
-        pieces.push_back(extractor.on_gpu() ? extractor(decomposition, d, domain.f, static_cast<float>(level))
-                                            : extractor(domain, static_cast<float>(level)));
+        pieces.push_back(extractor(domain, static_cast<float>(level)));
         extract_seconds += now_seconds() - t1;
         generate_seconds += t1 - t0;
         const auto [lo, hi] = std::minmax_element(domain.f.begin(), domain.f.end());
@@ -183,13 +180,22 @@ void run_extract(const ExtractArguments& args) {
     unlock_settled(surface, [&](GlobalId a, GlobalId b) { return decomposition.domains_of_edge(a, b); });
     const double combine_seconds = now_seconds() - t_combine;
 
+    // The field's range: for the message on an empty surface, and in the
+    // report (the GPU's domains have it on the host only when asked).
+    if (!range_known && (surface.triangle_count() == 0 || !args.report.empty()))
+        for (int d = 0; d < decomposition.domain_count(); ++d) {
+            const std::vector<float> values = decomposition.field_values(d, *field);
+            const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
+            lowest = std::min(lowest, *lo);
+            highest = std::max(highest, *hi);
+        }
     if (surface.triangle_count() == 0) report_empty(level, lowest, highest);
     ReduceReport reduce_report;
     if (args.reduce) {
         ReduceOptions options = args.reduce_options;
         options.threads = args.threads;
         options.max_error = args.max_error_spacings * lattice.spacing();
-        surface = tetiso::reduce(surface, options, &reduce_report);
+        surface = extractor.reduce(surface, options, reduce_report);
     }
     const double t_write = now_seconds();
     write_piece(surface, args.output);
@@ -251,10 +257,7 @@ void add_extract_command(CLI::App& app, Command& run) {
     cmd->add_option("--threads", args->threads, "Threads inside a domain (0 = all cores); output does not depend on it")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
-    cmd->add_option("--device", args->device,
-                    "Where the marching tetrahedra run: cpu, or gpu (CUDA; the same surface, bit for bit)")
-        ->check(CLI::IsMember({"cpu", "gpu"}))
-        ->capture_default_str();
+    add_device_options(*cmd, args->device, "the marching tetrahedra and the reduction");
     cmd->add_flag("--reduce", args->reduce, "Reduce the combined surface (parallel edge collapse and flip)");
     add_phi_option(*cmd, args->reduce_options.phi);
     cmd->add_option("--max-error", args->max_error_spacings,

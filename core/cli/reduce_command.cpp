@@ -59,6 +59,7 @@ struct ReduceArguments {
     std::filesystem::path input, output, report;
     ReduceOptions options;
     std::optional<double> max_error;
+    DeviceChoice device;
 };
 
 void run_reduce(const ReduceArguments& args) {
@@ -66,6 +67,7 @@ void run_reduce(const ReduceArguments& args) {
     surface_format(args.output);
     require_writable(args.output);
     if (!args.report.empty()) require_writable(args.report);
+    const std::unique_ptr<Gpu> gpu = open_gpu(args.device);
     const Piece input = read_piece(args.input);
     ReduceOptions options = args.options;
     // Without a lattice spacing to relate to, bound the error by a fraction
@@ -83,7 +85,7 @@ void run_reduce(const ReduceArguments& args) {
                          static_cast<long long>(over), args.input.string().c_str(), options.max_error);
     }
     ReduceReport report;
-    const Piece output = reduce(input, options, &report);
+    const Piece output = gpu ? gpu->reduce(input, options, &report) : reduce(input, options, &report);
     write_piece(output, args.output);
     if (!args.report.empty()) {
         nlohmann::json json = reduce_json(report);
@@ -93,6 +95,7 @@ void run_reduce(const ReduceArguments& args) {
         json["phi"] = options.phi;
         json["max_error"] = options.max_error;
         json["threads"] = options.threads;
+        json["device"] = device_json(gpu.get(), gpu ? gpu->last_timings() : GpuTimings{});
         json["total_seconds"] = now_seconds() - start;
         write_report(json, args.report);
     }
@@ -115,6 +118,7 @@ void add_reduce_command(CLI::App& app, Command& run) {
     cmd->add_option("--threads", args->options.threads, "Threads (0 = all cores); output does not depend on it")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
+    add_device_options(*cmd, args->device, "the rounds");
     cmd->add_option("--report", args->report, "Write a JSON report here");
     cmd->callback([&run, args] { run = [args] { run_reduce(*args); }; });
 }

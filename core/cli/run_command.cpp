@@ -15,6 +15,7 @@ namespace {
 
 struct RunArguments {
     JobConfig job;
+    DeviceChoice device;
     std::filesystem::path output;
     std::filesystem::path report;
     bool quiet = false;
@@ -29,8 +30,13 @@ nlohmann::json task_json(const TaskRecord& t) {
                   {"region", t.stages.region},
                   {"reduce", t.stages.reduce},
                   {"splice", t.stages.splice}};
+    if (t.stages.gpu >= 0) {
+        stages["upload"] = t.stages.upload;
+        stages["download"] = t.stages.download;
+    }
     return {{"task", t.task},
             {"kind", t.kind == TaskKind::domain ? "domain" : "seam"},
+            {"device", t.stages.gpu >= 0 ? "gpu " + std::to_string(t.stages.gpu) : std::string("cpu")},
             {"first_domain", t.first_domain},
             {"domain_count", t.domain_count},
             {"rank", t.rank},
@@ -135,6 +141,7 @@ void run_job(const RunArguments& args) {
         {"ranks", mpi.size()},
         {"workers", std::max(1, mpi.size() - 1)},
         {"threads", c.threads},
+        {"device", c.device == JobConfig::Device::gpu ? "gpu " + std::to_string(c.gpu) : std::string("cpu")},
         {"spacing", partition.spacing()},
         {"nodes", partition.node_count()},
         {"tets", partition.tet_count()},
@@ -206,7 +213,10 @@ void add_run_command(CLI::App& app, Command& run) {
     cmd->add_option("-o,--output", args->output, "Output surface, .ply or .vtp")->required();
     cmd->add_option("--report", args->report, "Write a JSON report (totals and one record per task) here");
     cmd->add_flag("--quiet", args->quiet, "No progress lines on stderr");
+    add_device_options(*cmd, args->device, "the domain tasks (extraction and reduction; seams stay on the CPU)");
     cmd->callback([&run, args, domains] {
+        args->job.device = args->device.on_gpu() ? JobConfig::Device::gpu : JobConfig::Device::cpu;
+        args->job.gpu = args->device.gpu;
         if (args->job.lattice == 0 && args->job.mesh.empty() && args->job.split.empty())
             throw CLI::ValidationError("give --lattice N, --mesh BASE or --split DIR");
         // With a partition file or a split the count is theirs, unless one is asked for.

@@ -25,14 +25,14 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <string>
+#include <vector>
 
 #include "extract_rules.hpp"
+#include "parallel.hpp"
 #include "tetiso/error.hpp"
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 namespace tetiso {
 namespace {
@@ -103,43 +103,26 @@ void march_chunk(const Domain& domain, const std::uint8_t* above, std::int32_t* 
             if (c.crossings == 4)
                 order[k] = edge_key(domain.gid[static_cast<std::size_t>(a)], domain.gid[static_cast<std::size_t>(b)]);
         }
-        if (c.crossings == 3) {
-            out.corners.insert(out.corners.end(), {code[0], code[1], code[2]});
-        } else {
-            if (extract_rules::split_through_first(order))
-                out.corners.insert(out.corners.end(), {code[0], code[1], code[2], code[0], code[2], code[3]});
-            else
-                out.corners.insert(out.corners.end(), {code[1], code[2], code[3], code[1], code[3], code[0]});
-        }
+        std::int32_t corners[6];
+        const int emitted = extract_rules::emit_triangles(c.crossings, code, order, corners);
+        out.corners.insert(out.corners.end(), corners, corners + emitted);
     }
 }
 
-int resolve_threads(int requested) {
-#ifdef _OPENMP
-    return requested > 0 ? requested : omp_get_max_threads();
-#else
-    (void)requested;
-    return 1;
-#endif
+extract_rules::NodeView node_view(const Domain& domain) {
+    return {domain.x.data(), domain.y.data(), domain.z.data(), domain.f.data(), domain.gid.data(),
+            domain.interface.data(), domain.shared_edges.data(), domain.shared_edges.size()};
 }
 
-// Vertex placement and flags for the crossing of edge (lo, hi).
-void place_vertex(const Domain& domain, float level, std::int32_t lo, std::int32_t hi, Piece& piece,
+void place_vertex(const extract_rules::NodeView& node, float level, std::int32_t lo, std::int32_t hi, Piece& piece,
                   std::size_t vertex) {
-    // Interpolate from the end with the smaller global id, so that every
-    // domain holding this edge computes the same bits.
-    const bool lo_first = domain.gid[static_cast<std::size_t>(lo)] < domain.gid[static_cast<std::size_t>(hi)];
-    const auto a = static_cast<std::size_t>(lo_first ? lo : hi);
-    const auto b = static_cast<std::size_t>(lo_first ? hi : lo);
-    const float t = extract_rules::crossing_parameter(domain.f[a], domain.f[b], level);
-    piece.x[vertex] = extract_rules::interpolate(domain.x[a], domain.x[b], t);
-    piece.y[vertex] = extract_rules::interpolate(domain.y[a], domain.y[b], t);
-    piece.z[vertex] = extract_rules::interpolate(domain.z[a], domain.z[b], t);
-    piece.key[vertex] = edge_key(domain.gid[a], domain.gid[b]);
-    const bool shared = (domain.interface[a] & domain.interface[b]) != 0 &&
-                        (domain.shared_edges.empty() ||
-                         std::binary_search(domain.shared_edges.begin(), domain.shared_edges.end(), piece.key[vertex]));
-    piece.flags[vertex] = shared ? static_cast<std::uint8_t>(kLocked) : std::uint8_t{0};
+    const extract_rules::CrossingVertex v =
+        extract_rules::place_crossing(node, static_cast<std::size_t>(lo), static_cast<std::size_t>(hi), level);
+    piece.x[vertex] = v.x;
+    piece.y[vertex] = v.y;
+    piece.z[vertex] = v.z;
+    piece.key[vertex] = v.key;
+    piece.flags[vertex] = v.flags;
 }
 
 void resize_vertices(Piece& piece, std::size_t n) {
@@ -171,20 +154,16 @@ Piece extract_by_sorting(const Domain& domain, float level, const std::vector<st
             order[k] = edge_key(domain.gid[static_cast<std::size_t>(a)], domain.gid[static_cast<std::size_t>(b)]);
             edges.push_back(e[k]);
         }
-        if (c.crossings == 3) {
-            corners.insert(corners.end(), {e[0], e[1], e[2]});
-        } else if (extract_rules::split_through_first(order)) {
-            corners.insert(corners.end(), {e[0], e[1], e[2], e[0], e[2], e[3]});
-        } else {
-            corners.insert(corners.end(), {e[1], e[2], e[3], e[1], e[3], e[0]});
-        }
+        std::uint64_t emitted[6];
+        const int n = extract_rules::emit_triangles(c.crossings, e, order, emitted);
+        corners.insert(corners.end(), emitted, emitted + n);
     }
     std::sort(edges.begin(), edges.end());
     edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
     Piece piece;
     resize_vertices(piece, edges.size());
     for (std::size_t i = 0; i < edges.size(); ++i)
-        place_vertex(domain, level, static_cast<std::int32_t>(edges[i] >> 32),
+        place_vertex(node_view(domain), level, static_cast<std::int32_t>(edges[i] >> 32),
                      static_cast<std::int32_t>(edges[i] & 0xffffffffu), piece, i);
     piece.triangles.resize(corners.size());
     for (std::size_t i = 0; i < corners.size(); ++i)
@@ -205,13 +184,23 @@ void extract_rules::check_domain(const Domain& domain) {
         throw Error(domain_name(domain.id) + ": shared edge keys are not sorted");
     if (n > static_cast<std::size_t>(INT32_MAX) / kBucket)
         throw Error(domain_name(domain.id) + ": too many nodes for one domain (" + std::to_string(n) + ")");
+    // Vertex keys are made of node ids: a repeated id would give two vertices
+    // one key. Ids in ascending order (the lattice's, most files') are
+    // checked in one pass.
+    if (std::adjacent_find(domain.gid.begin(), domain.gid.end(), std::greater_equal<GlobalId>()) != domain.gid.end()) {
+        std::vector<GlobalId> sorted = domain.gid;
+        std::sort(sorted.begin(), sorted.end());
+        const auto repeated = std::adjacent_find(sorted.begin(), sorted.end());
+        if (repeated != sorted.end())
+            throw Error(domain_name(domain.id) + ": node id " + std::to_string(*repeated) + " appears more than once");
+    }
 }
 
 Piece extract(const Domain& domain, float level, const ExtractOptions& options) {
     extract_rules::check_domain(domain);
     const std::size_t nodes = domain.node_count();
     const std::size_t tets = domain.tet_count();
-    const int threads = resolve_threads(options.threads);
+    const int threads = parallel::resolve_threads(options.threads);
     extract_rules::check_level(level);
 
     // 1. classify
@@ -261,6 +250,7 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
         resize_vertices(piece, static_cast<std::size_t>(first[nodes]));
 
         // 4. place; the bucket's slots are rewritten from higher node to vertex
+        const extract_rules::NodeView nodes_of = node_view(domain);
 #pragma omp parallel for num_threads(threads) schedule(static, 4096)
         for (std::int64_t node = 0; node < static_cast<std::int64_t>(nodes); ++node) {
             const auto v = static_cast<std::size_t>(node);
@@ -273,7 +263,7 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
                 int rank = 0;
                 for (int r = 0; r < filled; ++r) rank += higher[r] < higher[s] ? 1 : 0;
                 const std::size_t vertex = static_cast<std::size_t>(first[v] + rank);
-                place_vertex(domain, level, static_cast<std::int32_t>(node), higher[s], piece, vertex);
+                place_vertex(nodes_of, level, static_cast<std::int32_t>(node), higher[s], piece, vertex);
                 bucket[s] = static_cast<std::int32_t>(vertex);
             }
         }
@@ -293,7 +283,9 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
     if (piece.triangles.size() / 3 > static_cast<std::size_t>(INT32_MAX))
         extract_rules::throw_too_large(domain.id);
     // Lattice domains number nodes in global order, so this is a no-op there.
-    order_by_key(piece);
+    // Keys repeat only if node ids do, which check_domain refuses.
+    if (!order_by_key(piece))
+        throw Error(domain_name(domain.id) + ": internal error: two vertices of the surface share a key");
     piece.domains = {domain.id};
     return piece;
 }

@@ -11,14 +11,9 @@
 #include <cstdint>
 #include <string>
 
+#include "hd.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/mesh.hpp"
-
-#ifdef __CUDACC__
-#define TETISO_HOST_DEVICE __host__ __device__
-#else
-#define TETISO_HOST_DEVICE
-#endif
 
 namespace tetiso::extract_rules {
 
@@ -88,7 +83,7 @@ inline constexpr std::array<MarchCase, 16> kCases = build_cases();
 // Where the crossing of edge (a, b) lies, as the parameter from a, where a is
 // the end with the smaller global id (so that every domain holding the edge
 // computes the same bits): fa >= level > fb or the reverse.
-TETISO_HOST_DEVICE inline float crossing_parameter(float fa, float fb, float level) {
+TETISO_HD inline float crossing_parameter(float fa, float fb, float level) {
     float t = (level - fa) / (fb - fa);
     t = t < 0.0f ? 0.0f : (t > 1.0f ? 1.0f : t);
     // A crossing closer to a node than float resolves along its edge is the
@@ -103,18 +98,85 @@ TETISO_HOST_DEVICE inline float crossing_parameter(float fa, float fb, float lev
     return t;
 }
 
-TETISO_HOST_DEVICE inline float interpolate(float a, float b, float t) { return a + t * (b - a); }
+TETISO_HD inline float interpolate(float a, float b, float t) { return a + t * (b - a); }
 
 // Which of the quad's two diagonals splits it: the one through the crossing of
 // the edge with the smallest global key (the first such, of the quad's four
 // in case order) — a combinatorial rule, the same in every domain, node
 // numbering and backend. True: triangles (0, 1, 2) and (0, 2, 3); false:
 // (1, 2, 3) and (1, 3, 0).
-TETISO_HOST_DEVICE inline bool split_through_first(const EdgeKey order[4]) {
+TETISO_HD inline bool split_through_first(const EdgeKey order[4]) {
     int first_min = 0;
     for (int k = 1; k < 4; ++k)
         if (order[k] < order[first_min]) first_min = k;
     return first_min % 2 == 0;
+}
+
+// Which of a tetrahedron's triangles a cut emits, as corners named by the
+// crossings' codes (whatever the caller numbers them by: bucket slots,
+// vertex numbers, edge codes): one triangle for 3 crossings, the quad split
+// by split_through_first for 4 (order: the crossings' global keys). Returns
+// the number of corners written to out (3 or 6).
+template <class Code>
+TETISO_HD inline int emit_triangles(int crossings, const Code code[4], const EdgeKey order[4], Code* out) {
+    if (crossings == 3) {
+        out[0] = code[0], out[1] = code[1], out[2] = code[2];
+        return 3;
+    }
+    if (split_through_first(order)) {
+        out[0] = code[0], out[1] = code[1], out[2] = code[2];
+        out[3] = code[0], out[4] = code[2], out[5] = code[3];
+    } else {
+        out[0] = code[1], out[1] = code[2], out[2] = code[3];
+        out[3] = code[1], out[4] = code[3], out[5] = code[0];
+    }
+    return 6;
+}
+
+// A domain's node arrays as the placement reads them, on the host or the
+// device; shared: the domain's sorted shared-edge keys (none for a box,
+// whose node masks tell its shared edges).
+struct NodeView {
+    const float *x, *y, *z, *f;
+    const GlobalId* gid;
+    const std::uint8_t* interface;
+    const EdgeKey* shared;
+    std::size_t shared_count;
+};
+
+struct CrossingVertex {
+    float x, y, z;
+    EdgeKey key;
+    std::uint8_t flags;
+};
+
+TETISO_HD inline bool contains(const EdgeKey* sorted, std::size_t n, EdgeKey key) {
+    std::size_t lo = 0, hi = n;
+    while (lo < hi) {
+        const std::size_t mid = lo + (hi - lo) / 2;
+        if (sorted[mid] < key) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo < n && sorted[lo] == key;
+}
+
+// The vertex of the crossing on edge (lo, hi) (local node numbers): its
+// position, interpolated from the end with the smaller global id so that
+// every domain holding the edge computes the same bits; its key; locked when
+// the edge lies on an interface of the domain.
+TETISO_HD inline CrossingVertex place_crossing(const NodeView& node, std::size_t lo, std::size_t hi, float level) {
+    const bool lo_first = node.gid[lo] < node.gid[hi];
+    const std::size_t a = lo_first ? lo : hi, b = lo_first ? hi : lo;
+    const float t = crossing_parameter(node.f[a], node.f[b], level);
+    CrossingVertex v;
+    v.x = interpolate(node.x[a], node.x[b], t);
+    v.y = interpolate(node.y[a], node.y[b], t);
+    v.z = interpolate(node.z[a], node.z[b], t);
+    v.key = edge_key(node.gid[a], node.gid[b]);
+    const bool on_interface = (node.interface[a] & node.interface[b]) != 0 &&
+                              (node.shared_count == 0 || contains(node.shared, node.shared_count, v.key));
+    v.flags = on_interface ? static_cast<std::uint8_t>(kLocked) : std::uint8_t{0};
+    return v;
 }
 
 // The most nodes a domain may have: the CPU's buckets (8 slots per node) are

@@ -3,9 +3,9 @@
 #include "tetiso/field.hpp"
 
 #include <cmath>
-#include <numbers>
 #include <vector>
 
+#include "field_formulas.hpp"
 #include "tetiso/error.hpp"
 
 #ifdef TETISO_HAVE_MUPARSER
@@ -15,30 +15,23 @@
 namespace tetiso {
 namespace {
 
-constexpr double kCentre = 2.5; // the centre of the [0,5]^3 cube
-
-template <class Formula>
-class BuiltinField final : public Field {
+// A built-in field: field_formulas.hpp's formula, which the GPU evaluates too.
+class BuiltinFieldImpl final : public Field {
 public:
-    BuiltinField(std::string name, double level, Formula formula)
-        : name_(std::move(name)), level_(level), formula_(formula) {}
-    void evaluate(const double* x, const double* y, const double* z, std::size_t n,
-                  float* out) const override {
-        for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<float>(formula_(x[i], y[i], z[i]));
+    BuiltinFieldImpl(std::string name, double level, BuiltinField kind)
+        : name_(std::move(name)), level_(level), kind_(kind) {}
+    void evaluate(const double* x, const double* y, const double* z, std::size_t n, float* out) const override {
+        for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<float>(field_formulas::value(kind_, x[i], y[i], z[i]));
     }
     const std::string& description() const override { return name_; }
     double default_level() const override { return level_; }
+    std::optional<BuiltinField> builtin() const override { return kind_; }
 
 private:
     std::string name_;
     double level_;
-    Formula formula_;
+    BuiltinField kind_;
 };
-
-template <class Formula>
-std::unique_ptr<Field> builtin(std::string name, double level, Formula formula) {
-    return std::make_unique<BuiltinField<Formula>>(std::move(name), level, formula);
-}
 
 #ifdef TETISO_HAVE_MUPARSER
 // muparser's bulk mode evaluates one parsed expression over arrays of
@@ -84,34 +77,12 @@ private:
 const char* builtin_field_names() { return "paper, sphere, torus, gyroid"; }
 
 std::unique_ptr<Field> make_field(const std::string& text) {
-    if (text == "paper") {
-        return builtin("paper", 0.5, [](double x, double y, double z) {
-            return 2.0 * std::cos(10.0 * x) + 2.0 * std::sin(10.0 * y) + std::cos(10.0 * z);
-        });
-    }
-    if (text == "sphere") {
-        // Distance to the cube centre; level 2 is a closed sphere of radius 2.
-        return builtin("sphere", 2.0, [](double x, double y, double z) {
-            return std::sqrt((x - kCentre) * (x - kCentre) + (y - kCentre) * (y - kCentre) +
-                             (z - kCentre) * (z - kCentre));
-        });
-    }
-    if (text == "torus") {
-        // Distance to a circle of radius 1.5 around the z axis through the
-        // centre; level 0.6 is a closed torus (genus 1) inside the cube.
-        return builtin("torus", 0.6, [](double x, double y, double z) {
-            const double ring = std::hypot(x - kCentre, y - kCentre) - 1.5;
-            return std::hypot(ring, z - kCentre);
-        });
-    }
-    if (text == "gyroid") {
-        // Two periods along each axis: many handles, open at the cube faces.
-        return builtin("gyroid", 0.0, [](double x, double y, double z) {
-            constexpr double k = 2.0 * std::numbers::pi / 2.5;
-            return std::sin(k * x) * std::cos(k * y) + std::sin(k * y) * std::cos(k * z) +
-                   std::sin(k * z) * std::cos(k * x);
-        });
-    }
+    // Each built-in's isosurface level: paper 0.5 (the paper's), a sphere of
+    // radius 2, a torus of tube radius 0.6, the gyroid's zero set.
+    if (text == "paper") return std::make_unique<BuiltinFieldImpl>("paper", 0.5, BuiltinField::paper);
+    if (text == "sphere") return std::make_unique<BuiltinFieldImpl>("sphere", 2.0, BuiltinField::sphere);
+    if (text == "torus") return std::make_unique<BuiltinFieldImpl>("torus", 0.6, BuiltinField::torus);
+    if (text == "gyroid") return std::make_unique<BuiltinFieldImpl>("gyroid", 0.0, BuiltinField::gyroid);
 #ifdef TETISO_HAVE_MUPARSER
     return std::make_unique<ExpressionField>(text);
 #else

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "lattice_cells.hpp"
 #include "tetiso/error.hpp"
 
 namespace tetiso {
@@ -177,9 +178,7 @@ Domain Decomposition::make_domain(int domain, const Field& field) const {
 }
 
 Domain make_box_domain(const Lattice& lattice, const CellBox& box, const Field& field, std::uint8_t open_faces) {
-    const std::int64_t nx = box.hi[0] - box.lo[0], ny = box.hi[1] - box.lo[1], nz = box.hi[2] - box.lo[2];
-    const std::int64_t px = nx + 1, py = ny + 1, pz = nz + 1; // nodes per axis
-
+    const lattice_cells::Box b = lattice_cells::box_of(lattice, box, open_faces);
     Domain out;
     out.f = box_field_values(lattice, box, field);
     const std::size_t nodes = out.f.size();
@@ -188,47 +187,20 @@ Domain make_box_domain(const Lattice& lattice, const CellBox& box, const Field& 
     out.z.resize(nodes);
     out.gid.resize(nodes);
     out.interface.resize(nodes);
-    for (std::int64_t k = 0; k < pz; ++k) {
-        for (std::int64_t j = 0; j < py; ++j) {
-            const std::size_t first = static_cast<std::size_t>(px * (j + py * k));
-            const std::int64_t gj = box.lo[1] + j, gk = box.lo[2] + k;
-            for (std::int64_t i = 0; i < px; ++i) {
-                const std::int64_t gi = box.lo[0] + i;
-                const std::size_t v = first + static_cast<std::size_t>(i);
-                out.x[v] = static_cast<float>(lattice.coordinate(gi));
-                out.y[v] = static_cast<float>(lattice.coordinate(gj));
-                out.z[v] = static_cast<float>(lattice.coordinate(gk));
-                out.gid[v] = lattice.node_id(gi, gj, gk);
-                const unsigned faces = (i == 0 ? 1u : 0u) | (i == nx ? 2u : 0u) | (j == 0 ? 4u : 0u) |
-                                       (j == ny ? 8u : 0u) | (k == 0 ? 16u : 0u) | (k == nz ? 32u : 0u);
-                out.interface[v] = static_cast<std::uint8_t>(faces & open_faces);
-            }
-        }
+    for (std::size_t v = 0; v < nodes; ++v) {
+        const lattice_cells::Node node = lattice_cells::node(b, static_cast<std::int64_t>(v));
+        out.x[v] = static_cast<float>(node.x);
+        out.y[v] = static_cast<float>(node.y);
+        out.z[v] = static_cast<float>(node.z);
+        out.gid[v] = node.gid;
+        out.interface[v] = node.interface;
     }
-
-    // Six tetrahedra per cell, one per ordering of the axes: each walks from
-    // the cell's lowest corner to its highest along one monotone path. The
-    // split is the same in every cell, so shared faces match. An ordering of
-    // odd parity gives a negatively oriented walk; swapping its middle two
-    // vertices makes it positive.
-    const std::int64_t stride[3] = {1, px, px * py};
-    out.tets.resize(static_cast<std::size_t>(nx * ny * nz) * 24);
-    std::int32_t* tet = out.tets.data();
-    for (std::int64_t k = 0; k < nz; ++k)
-        for (std::int64_t j = 0; j < ny; ++j)
-            for (std::int64_t i = 0; i < nx; ++i) {
-                const std::int64_t origin = i + px * (j + py * k);
-                for (int t = 0; t < 6; ++t) {
-                    const std::int64_t v1 = origin + stride[kCellTetOrders[t][0]];
-                    const std::int64_t v2 = v1 + stride[kCellTetOrders[t][1]];
-                    const bool odd = t >= 3;
-                    tet[0] = static_cast<std::int32_t>(origin);
-                    tet[1] = static_cast<std::int32_t>(odd ? v2 : v1);
-                    tet[2] = static_cast<std::int32_t>(odd ? v1 : v2);
-                    tet[3] = static_cast<std::int32_t>(origin + stride[0] + stride[1] + stride[2]);
-                    tet += 4;
-                }
-            }
+    const auto tets = static_cast<std::size_t>(b.nx * b.ny * b.nz) * 6;
+    out.tets.resize(4 * tets);
+    for (std::size_t t = 0; t < tets; ++t) {
+        const lattice_cells::Tet tet = lattice_cells::tet(b, static_cast<std::int64_t>(t));
+        for (int c = 0; c < 4; ++c) out.tets[4 * t + static_cast<std::size_t>(c)] = tet.v[c];
+    }
     return out;
 }
 

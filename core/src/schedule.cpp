@@ -8,6 +8,7 @@
 
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
+#include "tetiso/gpu.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/mesh_partition.hpp"
 #include "tetiso/mesh_split.hpp"
@@ -102,6 +103,57 @@ Job::Job(const JobConfig& config) : config_(config) {
     tree_ = task_tree(partition_->tree());
     reduce_options_ = config.reduce_options;
     if (config.max_error_spacings > 0) reduce_options_.max_error = config.max_error_spacings * partition_->spacing();
+    if (config.device == JobConfig::Device::gpu)
+        if (const GpuInfo info = gpu_info(config.gpu); !info.available) throw Error("--device gpu: " + info.description);
+}
+
+Job::~Job() = default;
+
+Piece Job::execute_on_gpu(int domain, TaskRecord& record, const ReduceOptions& options) const {
+    if (!gpu_) gpu_ = std::make_unique<Gpu>(config_.gpu);
+    Gpu& gpu = *gpu_;
+    const auto* lattice = dynamic_cast<const LatticePartition*>(partition_.get());
+    const auto start = std::chrono::steady_clock::now();
+    Piece piece;
+    ReduceReport report;
+    double reduce_seconds = 0; // a piece reduced by the host's rules around pinches
+    std::size_t extracted = 0;
+    if (lattice && !config_.reduce) {
+        piece = gpu.extract(lattice->decomposition(), domain, lattice->field(), level_);
+    } else if (lattice) {
+        piece = gpu.extract_and_reduce(lattice->decomposition(), domain, lattice->field(), level_, options, &report);
+    } else {
+        const Domain d = partition_->make_domain(domain);
+        record.stages.generate = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (!config_.reduce) {
+            piece = gpu.extract(d, level_);
+        } else if (partition_->pieces_are_manifold()) {
+            piece = gpu.extract_and_reduce(d, level_, options, &report);
+        } else {
+            piece = gpu.extract(d, level_);
+            extracted = piece.triangle_count();
+            const auto t = std::chrono::steady_clock::now();
+            const GpuTimings extraction = gpu.last_timings();
+            piece = reduce_piece(piece, options, &report, [&gpu](const Piece& p, const ReduceOptions& o, ReduceReport* r) {
+                return gpu.reduce(p, o, r);
+            });
+            reduce_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+            record.stages.upload = extraction.upload;
+            record.stages.extract = extraction.extract;
+            record.stages.download = extraction.download;
+            record.stages.reduce = reduce_seconds;
+        }
+    }
+    if (reduce_seconds == 0) {
+        const GpuTimings& t = gpu.last_timings();
+        record.stages.upload = t.upload;
+        record.stages.extract = t.extract;
+        record.stages.reduce = t.reduce;
+        record.stages.download = t.download;
+    }
+    record.stages.gpu = gpu.device();
+    record.triangles_in = extracted > 0 ? extracted : config_.reduce ? report.triangles_in : piece.triangle_count();
+    return piece;
 }
 
 std::string Job::describe(int task) const {
@@ -126,6 +178,15 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
         t0 = t1;
         return s;
     };
+    if (n.count == 1 && config_.device == JobConfig::Device::gpu) {
+        ReduceOptions options = reduce_options(threads);
+        options.keep_samples = true;
+        Piece piece = execute_on_gpu(n.first, record, options);
+        if (config_.reduce) keep_samples_near_locked(piece, config_.sample_rings);
+        record.triangles_out = piece.triangle_count();
+        record.samples_out = piece.sample_count();
+        return piece;
+    }
     if (n.count == 1) {
         Piece piece;
         {

@@ -358,7 +358,8 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
     ReduceReport reduce_report;
     ReduceOptions reduce_options = options.reduce_options;
     reduce_options.keep_samples = true;
-    const Piece reduced = reduce(sub, reduce_options, &reduce_report);
+    const Piece reduced = options.reducer ? options.reducer(sub, reduce_options, &reduce_report)
+                                          : reduce(sub, reduce_options, &reduce_report);
     const double reduce_seconds = lap(clock);
 
     // Splice: vertices of the sub-piece that the reduction removed are dropped,
@@ -420,16 +421,17 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
     return out;
 }
 
-Piece reduce_piece(const Piece& piece, const ReduceOptions& options, ReduceReport* report) {
+Piece reduce_piece(const Piece& piece, const ReduceOptions& options, ReduceReport* report, const Reducer& reducer) {
     std::vector<std::int32_t> all(piece.triangle_count());
     std::iota(all.begin(), all.end(), 0);
     if (pinched_vertices(piece, all).empty()) {
         ReduceOptions whole = options;
         whole.keep_samples = true;
-        return reduce(piece, whole, report);
+        return reducer ? reducer(piece, whole, report) : reduce(piece, whole, report);
     }
     SeamOptions around_pinches;
     around_pinches.reduce_options = options;
+    around_pinches.reducer = reducer;
     around_pinches.rings = 0;
     SeamReport seam_report;
     Piece out = reduce_near(piece, std::vector<std::uint8_t>(piece.vertex_count(), 1), around_pinches, &seam_report);

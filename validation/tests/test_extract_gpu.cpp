@@ -25,7 +25,7 @@
 #include "test_support.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
-#include "tetiso/extract_gpu.hpp"
+#include "tetiso/gpu.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/mesh_partition.hpp"
@@ -40,11 +40,11 @@ namespace {
         if (!info.available) GTEST_SKIP() << "no GPU: " << info.description;      \
     } while (false)
 
-// One extractor for the whole program: its buffers then serve domains of
-// every size in turn, which is how a worker uses it.
-GpuExtractor& gpu() {
-    static GpuExtractor extractor;
-    return extractor;
+// One GPU for the whole program: its buffers then serve domains of every
+// size in turn, which is how a worker uses it.
+Gpu& gpu() {
+    static Gpu device;
+    return device;
 }
 
 template <class T>
@@ -105,8 +105,9 @@ TEST_P(GpuLattice, EveryDomainIsTheCpuPieceBitForBit) {
         const Piece cpu = extract(domain, level);
         triangles += cpu.triangle_count();
         EXPECT_TRUE(identical(cpu, gpu().extract(domain, level))) << "domain " << d;
-        // The lattice path: only the values uploaded, the rest built on the device.
-        EXPECT_TRUE(identical(cpu, gpu().extract(decomposition, d, decomposition.field_values(d, *field), level)))
+        // The lattice path: the domain built on the device, a built-in field
+        // evaluated there, an expression's values uploaded.
+        EXPECT_TRUE(identical(cpu, gpu().extract(decomposition, d, *field, level)))
             << "domain " << d << ", built on the device";
     }
     EXPECT_GT(triangles, 0u); // the case has a surface to compare
@@ -239,12 +240,8 @@ TEST(Gpu, BadLatticeValuesGiveTheCpuErrors) {
     const auto pole = make_field("1/(x-2.5)");
     for (int d = 0; d < four.domain_count(); ++d) {
         const std::string cpu = error_of([&] { extract(four.make_domain(d, *pole), 0.5f); });
-        EXPECT_EQ(cpu, error_of([&] { gpu().extract(four, d, four.field_values(d, *pole), 0.5f); })) << d;
+        EXPECT_EQ(cpu, error_of([&] { gpu().extract(four, d, *pole, 0.5f); })) << d;
     }
-    std::vector<float> short_values = four.field_values(0, *make_field("paper"));
-    short_values.pop_back();
-    EXPECT_NE(error_of([&] { gpu().extract(four, 0, short_values, 0.5f); }).find("domain 0: node arrays differ"),
-              std::string::npos);
 }
 
 TEST(Gpu, EmptyDomainsAndLevelsOutsideTheRangeGiveEmptyPieces) {
@@ -267,8 +264,8 @@ TEST(Gpu, WithoutADeviceAskingForOneIsAClearError) {
     const GpuInfo info = gpu_info();
     if (info.available) GTEST_SKIP() << "a GPU is present: " << info.description;
     EXPECT_FALSE(info.description.empty());
-    const std::string message = error_of([] { GpuExtractor extractor; });
-    EXPECT_EQ(message.rfind("GPU extraction: ", 0), 0u) << message;
+    const std::string message = error_of([] { Gpu device; });
+    EXPECT_EQ(message.rfind("GPU: ", 0), 0u) << message;
 }
 
 } // namespace

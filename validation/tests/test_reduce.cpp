@@ -1,10 +1,12 @@
-// Reduction (core/src/reduce.cpp): the reduced surface keeps the topology of
+// Reduction (core/src/reduce/): the reduced surface keeps the topology of
 // every component, stays a consistently oriented manifold without degenerate
 // triangles, keeps locked vertices bit for bit and border vertices on the
 // border, stays within half a lattice spacing of the input, and does not
 // depend on the thread count. Tiny exact meshes built here probe the branches
 // (needles, zero-length edges, valence-3 vertices, flips, thin handles,
-// minimal components); extracted lattice surfaces probe the whole.
+// minimal components); extracted lattice surfaces probe the whole. Built a
+// second time as test_reduce_gpu, where every reduction also runs on the GPU
+// and must give the same bytes (reduce_under_test.hpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -17,8 +19,10 @@
 #include <string>
 #include <vector>
 
+#include "reduce_under_test.hpp"
 #include "test_support.hpp"
 #include "tetiso/check.hpp"
+#include "tetiso/detail/reduce_policy.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/reduce.hpp"
@@ -27,6 +31,7 @@ namespace tetiso {
 namespace {
 
 using test::lattice_surface;
+using test::reduce_under_test;
 
 // ---------------------------------------------------------------------------
 // Meshes built in code. Keys are 0..n-1, flags 0.
@@ -188,21 +193,21 @@ TEST(Reduce, RejectsPhiOutsideItsRangeAndOtherBadOptions) {
     for (const double phi : {0.0, -0.5, 1.01, std::nan("")}) {
         ReduceOptions o;
         o.phi = phi;
-        EXPECT_THROW(reduce(sphere, o), Error) << phi;
+        EXPECT_THROW(reduce_under_test(sphere, o), Error) << phi;
     }
     ReduceOptions o;
     o.phi = 1.0;
-    EXPECT_NO_THROW(reduce(sphere, o));
+    EXPECT_NO_THROW(reduce_under_test(sphere, o));
     o.threads = -1;
-    EXPECT_THROW(reduce(sphere, o), Error);
+    EXPECT_THROW(reduce_under_test(sphere, o), Error);
     o = {};
     o.min_angle_degrees = 45;
-    EXPECT_THROW(reduce(sphere, o), Error);
+    EXPECT_THROW(reduce_under_test(sphere, o), Error);
 }
 
 std::string error_of(const Piece& p) {
     try {
-        reduce(p);
+        reduce_under_test(p);
     } catch (const Error& e) {
         return e.what();
     }
@@ -236,11 +241,11 @@ TEST(Reduce, NamesTheEdgeOrVertexOfNonManifoldInput) {
     Builder repeat;
     for (int i = 0; i < 3; ++i) repeat.add(i, 0, 0);
     repeat.tri(0, 1, 1);
-    EXPECT_THROW(reduce(repeat.piece), Error);
+    EXPECT_THROW(reduce_under_test(repeat.piece), Error);
 
     Piece unsorted = icosphere(0);
     std::swap(unsorted.key[0], unsorted.key[1]);
-    EXPECT_THROW(reduce(unsorted), Error);
+    EXPECT_THROW(reduce_under_test(unsorted), Error);
 }
 
 // ---------------------------------------------------------------------------
@@ -258,14 +263,14 @@ TEST(Reduce, MinimalComponentsStay) {
     any.phi = 1e-6;
     any.max_normal_turn_degrees = 89;
     for (const Piece& p : {tet.piece, one.piece}) {
-        const Piece out = reduce(p, any);
+        const Piece out = reduce_under_test(p, any);
         EXPECT_EQ(out.triangle_count(), p.triangle_count());
         expect_valid(p, out, "minimal");
     }
     // An icosahedron reduced as far as the options allow stays a closed
     // genus-0 surface of at least 4 vertices.
     const Piece ico = icosphere(0);
-    const Piece out = reduce(ico, any);
+    const Piece out = reduce_under_test(ico, any);
     EXPECT_GE(out.vertex_count(), 4u);
     EXPECT_LT(out.triangle_count(), ico.triangle_count());
     expect_valid(ico, out, "icosahedron");
@@ -282,7 +287,7 @@ TEST(Reduce, PhiGatesEveryCollapseOutsideTheShortAndValenceThreeBranches) {
     ReduceOptions o;
     o.max_normal_turn_degrees = 89;
     ReduceReport report;
-    const Piece out = reduce(ico, o, &report);
+    const Piece out = reduce_under_test(ico, o, &report);
     EXPECT_TRUE(tetiso::test::same_surface(ico, out));
     ASSERT_FALSE(report.rounds.empty());
     EXPECT_EQ(report.rounds[0].candidates, 30u); // every edge could collapse but for Φ
@@ -304,7 +309,7 @@ TEST(Reduce, ReportRoundsAccountForEveryVertexAndTriangle) {
     for (const Surface& c : {Surface{"open grid", grid(30), false},
                              Surface{"closed torus", lattice_surface(40, 1, "torus"), true}}) {
         ReduceReport report;
-        const Piece out = reduce(c.piece, {}, &report);
+        const Piece out = reduce_under_test(c.piece, {}, &report);
         const auto& rounds = report.rounds;
         ASSERT_GE(rounds.size(), 2u) << c.name;
         EXPECT_EQ(rounds.front().vertices, c.piece.vertex_count()) << c.name;
@@ -338,7 +343,7 @@ TEST(Reduce, ReportRoundsAccountForEveryVertexAndTriangle) {
 TEST(Reduce, FlatDiskCollapsesAndItsBorderStaysOnTheSquareWithItsCorners) {
     const Piece in = grid(40);
     ReduceReport report;
-    const Piece out = reduce(in, {}, &report);
+    const Piece out = reduce_under_test(in, {}, &report);
     expect_valid(in, out, "grid");
     EXPECT_EQ(report.triangles_in, in.triangle_count());
     EXPECT_EQ(report.triangles_out, out.triangle_count());
@@ -381,7 +386,7 @@ TEST(Reduce, LockedVerticesNeverMoveNorGo) {
     for (std::size_t v = 0; v < in.vertex_count(); ++v) in.z[v] = static_cast<float>(0.02 * in.x[v] * in.x[v]);
     ReduceOptions o;
     o.phi = 0.8;
-    const Piece out = reduce(in, o);
+    const Piece out = reduce_under_test(in, o);
     expect_valid(in, out, "locked grid");
     EXPECT_LT(out.triangle_count() * 3, in.triangle_count());
 }
@@ -407,7 +412,7 @@ TEST(Reduce, NoNewEdgeJoinsTwoLockedVertices) {
         const std::size_t i = v % 13, j = v / 13;
         if (i == 0 || j == 0 || i == 12 || j == 12) in.flags[v] = kLocked;
     }
-    const Piece out = reduce(in);
+    const Piece out = reduce_under_test(in);
     expect_valid(in, out, "grid with a locked border");
     EXPECT_LT(out.triangle_count(), in.triangle_count() / 4);
     const auto before = locked_edges(in), after = locked_edges(out);
@@ -433,7 +438,7 @@ TEST(Reduce, ZeroLengthEdgesAndNeedlesAreCleanedUp) {
     ASSERT_GT(check_topology(b.piece).degenerate_triangles, 0);
     ReduceOptions o;
     o.phi = 1.0; // only the short-edge, valence-3 and flip branches act
-    const Piece out = reduce(b.piece, o);
+    const Piece out = reduce_under_test(b.piece, o);
     expect_valid(b.piece, out, "doubled rows");
     const TopologyReport r = check_topology(out);
     EXPECT_EQ(r.near_degenerate_triangles, 0);
@@ -462,7 +467,7 @@ TEST(Reduce, ValenceThreeVerticesAreRemoved) {
     ReduceOptions o;
     o.phi = 1.0;
     o.flips = false;
-    const Piece out = reduce(b.piece, o);
+    const Piece out = reduce_under_test(b.piece, o);
     expect_valid(b.piece, out, "split icosphere");
     EXPECT_EQ(interior_valence3(out), 0u);
     EXPECT_EQ(out.triangle_count(), base.triangle_count());
@@ -519,7 +524,7 @@ TEST(Reduce, NeedlesAroundATinyClusterGoWithIt) {
     ASSERT_EQ(interior_valence3(b.piece), static_cast<std::size_t>(clusters));
     ReduceOptions o;
     o.phi = 1.0; // only the short-edge, valence-3 and flip branches act
-    const Piece out = reduce(b.piece, o);
+    const Piece out = reduce_under_test(b.piece, o);
     expect_valid(b.piece, out, "clusters");
     EXPECT_EQ(check_topology(out).near_degenerate_triangles, 0);
     EXPECT_EQ(interior_valence3(out), 0u);
@@ -536,7 +541,7 @@ TEST(Reduce, FlipsMendTheNarrowTrianglesOfAShearedGrid) {
     o.phi = 1.0;
     o.short_edge_ratio = 0.0;
     ReduceReport report;
-    const Piece out = reduce(in, o, &report);
+    const Piece out = reduce_under_test(in, o, &report);
     expect_valid(in, out, "sheared grid");
     std::size_t flips = 0, collapses = 0;
     for (const auto& r : report.rounds) {
@@ -559,7 +564,7 @@ TEST(Reduce, ThinHandleIsNotPinchedOff) {
         const Piece in = torus(200, nv, 1.0, 0.01);
         ReduceOptions o;
         o.phi = 0.5;
-        const Piece out = reduce(in, o);
+        const Piece out = reduce_under_test(in, o);
         expect_valid(in, out, "thin torus " + std::to_string(nv));
         const TopologyReport r = check_topology(out);
         ASSERT_EQ(r.per_component.size(), 1u);
@@ -585,13 +590,13 @@ TEST(Reduce, SphereAndTorusBuiltInCode) {
     const Piece sphere = icosphere(5);
     ReduceOptions o;
     o.max_error = bound;
-    const Piece s = reduce(sphere, o);
+    const Piece s = reduce_under_test(sphere, o);
     expect_valid(sphere, s, "icosphere");
     EXPECT_LE(vertex_distance(sphere, s), bound * (1 + 1e-5));
     EXPECT_LE(hausdorff(sphere, s).symmetric, 2 * bound);
     EXPECT_GT(test::signed_volume(s) * test::signed_volume(sphere), 0) << "orientation kept";
     const Piece ring = torus(240, 60, 1.0, 0.3);
-    const Piece t = reduce(ring, o);
+    const Piece t = reduce_under_test(ring, o);
     expect_valid(ring, t, "torus");
     EXPECT_LE(vertex_distance(ring, t), bound * (1 + 1e-5));
     EXPECT_LE(hausdorff(ring, t).symmetric, 2 * bound);
@@ -618,7 +623,7 @@ TEST(Reduce, ExtractedSurfacesKeepTopologyAndStayWithinHalfASpacing) {
         ReduceOptions o;
         o.max_error = 0.25 * h;
         ReduceReport report;
-        const Piece out = reduce(in, o, &report);
+        const Piece out = reduce_under_test(in, o, &report);
         expect_valid(in, out, c.field);
         EXPECT_LE(vertex_distance(in, out), o.max_error * (1 + 1e-5)) << c.field;
         const HausdorffReport d = hausdorff(in, out);
@@ -639,11 +644,11 @@ TEST(Reduce, ErrorBoundHoldsOverRepeatedReductions) {
     const Piece in = lattice_surface(n, 1, "paper");
     ReduceOptions o;
     o.max_error = 0.25 * h;
-    const Piece once = reduce(in, o);
+    const Piece once = reduce_under_test(in, o);
     ASSERT_EQ(once.error.size(), once.triangle_count());
     for (const float e : once.error) ASSERT_LE(e, o.max_error);
     o.phi = 0.8; // a laxer criterion offers the second pass new collapses
-    const Piece twice = reduce(once, o);
+    const Piece twice = reduce_under_test(once, o);
     expect_valid(in, twice, "reduced twice");
     ASSERT_EQ(twice.error.size(), twice.triangle_count());
     for (const float e : twice.error) ASSERT_LE(e, o.max_error);
@@ -670,19 +675,19 @@ TEST(Reduce, KeptSamplesAreTheRawVerticesAndLetALaterPassSpendTheBudgetAgain) {
     ReduceOptions o;
     o.max_error = 0.25 * h;
     o.keep_samples = true;
-    const Piece once = reduce(in, o);
+    const Piece once = reduce_under_test(in, o);
     ASSERT_EQ(once.sampled.size(), once.triangle_count());
     EXPECT_TRUE(std::all_of(once.sampled.begin(), once.sampled.end(), [](auto s) { return s == 1; }));
     EXPECT_EQ(test::sample_positions(once), raw);
     test::expect_samples_sound(once, raw, "once");
 
     o.phi = 0.8; // a laxer criterion offers the second pass new collapses
-    const Piece twice = reduce(once, o);
+    const Piece twice = reduce_under_test(once, o);
     Piece blind = once;
     blind.sample_xyz.clear();
     blind.sample_triangle.clear();
     blind.sampled.clear();
-    const Piece twice_blind = reduce(blind, o);
+    const Piece twice_blind = reduce_under_test(blind, o);
     expect_valid(in, twice, "reduced twice, with the raw vertices");
     expect_valid(in, twice_blind, "reduced twice, with the errors only");
     EXPECT_LE(vertex_distance(in, twice), o.max_error * (1 + 1e-5));
@@ -697,13 +702,13 @@ TEST(Reduce, KeptSamplesAreTheRawVerticesAndLetALaterPassSpendTheBudgetAgain) {
     // Samples that do not fit the piece are refused, not used.
     Piece bad = once;
     bad.sample_triangle.front() = static_cast<std::int32_t>(bad.triangle_count());
-    EXPECT_THROW(reduce(bad, o), Error);
+    EXPECT_THROW(reduce_under_test(bad, o), Error);
     bad = once;
     bad.sampled.assign(bad.triangle_count(), 0);
-    EXPECT_THROW(reduce(bad, o), Error);
+    EXPECT_THROW(reduce_under_test(bad, o), Error);
     bad = once;
     bad.sample_xyz.pop_back();
-    EXPECT_THROW(reduce(bad, o), Error);
+    EXPECT_THROW(reduce_under_test(bad, o), Error);
 }
 
 TEST(Reduce, SurfaceThroughMeshNodesIsCleanedUp) {
@@ -713,7 +718,7 @@ TEST(Reduce, SurfaceThroughMeshNodesIsCleanedUp) {
     const std::int64_t n = 41;
     const Piece in = lattice_surface(n, 1, "x - 2.5", 0.0);
     ASSERT_GT(check_topology(in).degenerate_triangles, 0);
-    const Piece out = reduce(in);
+    const Piece out = reduce_under_test(in);
     expect_valid(in, out, "plane through nodes");
     EXPECT_EQ(check_topology(out).near_degenerate_triangles, 0);
     EXPECT_LT(out.triangle_count() * 50, in.triangle_count());
@@ -742,7 +747,7 @@ TEST(Reduce, ClustersWithinFloatResolutionOfAMeshNodeAreCleanedUp) {
         const Piece in = extract(make_box_domain(lattice, box, *field, 0), static_cast<float>(field->default_level()));
         SCOPED_TRACE("around node " + std::to_string(node[0]) + "," + std::to_string(node[1]) + "," + std::to_string(node[2]));
         ASSERT_GT(zero_area_triangles(in), 0) << "the surface no longer passes that close to the node";
-        const Piece out = reduce(in, o);
+        const Piece out = reduce_under_test(in, o);
         expect_valid(in, out, "cluster");
         EXPECT_LT(out.triangle_count() * 4, in.triangle_count());
     }
@@ -757,7 +762,7 @@ TEST(Reduce, InterfaceVerticesOfADomainStayLocked) {
     ASSERT_GT(locked, 0);
     ReduceOptions o;
     o.max_error = 0.4 * lattice.spacing();
-    const Piece out = reduce(in, o);
+    const Piece out = reduce_under_test(in, o);
     expect_valid(in, out, "domain piece");
     EXPECT_LT(out.triangle_count() * 2, in.triangle_count());
 }
@@ -771,14 +776,14 @@ TEST(Reduce, OutputDoesNotDependOnThreadsOrRuns) {
     o.max_error = 0.4 * Lattice(40).spacing();
     o.keep_samples = true;
     o.threads = 1;
-    const Piece a = reduce(in, o);
-    const Piece b = reduce(in, o);
+    const Piece a = reduce_under_test(in, o);
+    const Piece b = reduce_under_test(in, o);
     o.threads = 2;
-    const Piece c = reduce(in, o);
+    const Piece c = reduce_under_test(in, o);
     // Another count: the reservations' steps decide other operations
     // together, never others in the end.
     o.threads = 3;
-    const Piece d = reduce(in, o);
+    const Piece d = reduce_under_test(in, o);
     EXPECT_TRUE(identical(a, b));
     EXPECT_TRUE(identical(a, c));
     EXPECT_TRUE(identical(a, d));
@@ -794,18 +799,47 @@ TEST(Reduce, ThreadsOfferedBetweenRoundsChangeNothing) {
     ReduceOptions o;
     o.max_error = 0.4 * Lattice(40).spacing();
     ReduceReport single_report;
-    const Piece single = reduce(in, o, &single_report);
+    const Piece single = reduce_under_test(in, o, &single_report);
     int asked = 0;
     o.more_threads = [&asked] {
         ++asked;
         return asked % 3 == 0 ? 3 : asked % 3 == 1 ? 0 : 2; // keep, 2, 3, keep, ...
     };
     ReduceReport report;
-    const Piece varied = reduce(in, o, &report);
+    const Piece varied = reduce_under_test(in, o, &report);
     EXPECT_TRUE(identical(single, varied));
     // Asked before every round, the last one (which finds nothing) included.
     EXPECT_GE(asked, static_cast<int>(report.rounds.size()));
     EXPECT_EQ(report.rounds.size(), single_report.rounds.size());
+}
+
+// The GPU chooses each round's independent set by deterministic
+// reservations with a window of the whole round, in every round and for the
+// flips too, where the host sweeps in order on one thread and takes windows
+// of a thirty-second on several. The choice, and so the surface, must not
+// depend on how it is made: here on the host, where CI runs it, with windows
+// of one operation up to all of them.
+TEST(Reduce, ChoosingByReservationsAsTheGpuDoesGivesTheSameBytes) {
+    for (const char* field : {"paper", "gyroid"})
+        for (const int domains : {1, 8}) {
+            // The whole surface, or one domain's piece, its interface locked.
+            const Lattice lattice(40);
+            const Decomposition decomposition(lattice, domains);
+            const auto f = make_field(field);
+            const Piece in = extract(decomposition.make_domain(domains - 1, *f), static_cast<float>(f->default_level()));
+            ReduceOptions o;
+            o.max_error = 0.25 * lattice.spacing();
+            o.keep_samples = true;
+            const Piece swept = reduce(in, o);
+            EXPECT_EQ(domains > 1, std::count(in.flags.begin(), in.flags.end(), kLocked) > 0);
+            EXPECT_LT(swept.triangle_count(), in.triangle_count());
+            for (const long window : {1L, 5L, 1000L, 0L, 1L << 30})
+                for (const int threads : {1, 2}) {
+                    o.threads = threads;
+                    EXPECT_TRUE(identical(swept, detail::reduce_by_reservations(in, o, window)))
+                        << field << ", " << domains << " domains, window " << window << ", " << threads << " threads";
+                }
+        }
 }
 
 } // namespace

@@ -5,10 +5,15 @@
 // never depends on the domain that asks for it.
 #pragma once
 
+#include <cstddef>
 #include <memory>
+#include <optional>
 #include <string>
 
 namespace tetiso {
+
+// The built-in fields: their values are the same bits on the CPU and the GPU.
+enum class BuiltinField { paper, sphere, torus, gyroid };
 
 class Field {
 public:
@@ -21,6 +26,9 @@ public:
     virtual const std::string& description() const = 0;
     // The isosurface level to use when the user gives none.
     virtual double default_level() const = 0;
+    // Which built-in field this is, if it is one (the GPU evaluates those
+    // itself); an expression is none.
+    virtual std::optional<BuiltinField> builtin() const { return std::nullopt; }
 };
 
 // Builds a field from a built-in name (paper, sphere, torus, gyroid) or, if

@@ -90,8 +90,8 @@ public:
     Domain make_domain(int domain, const Field& field) const;
 
     // The field values alone, as make_domain gives them (node i + px*(j +
-    // py*k) of the box, px and py its nodes per axis): what the GPU needs
-    // of a lattice domain, which builds the rest itself (extract_gpu.hpp).
+    // py*k) of the box, px and py its nodes per axis): what the GPU needs of
+    // a lattice domain whose field it cannot evaluate itself (gpu.hpp).
     std::vector<float> field_values(int domain, const Field& field) const;
 
     // Nodes of one domain; throws tetiso::Error when they do not fit int32.
@@ -131,6 +131,7 @@ public:
 
     const Lattice& lattice() const { return lattice_; }
     const Decomposition& decomposition() const { return decomposition_; }
+    const Field& field() const { return *field_; }
 
     int domain_count() const override { return decomposition_.domain_count(); }
     const std::vector<int>& neighbours(int domain) const override { return decomposition_.neighbours(domain); }

@@ -53,6 +53,12 @@ struct JobConfig {
     // more reduces the seams further and costs memory and messages; -1 keeps none.
     int sample_rings = SeamOptions{}.sample_rings;
     int threads = 1;                 // threads inside one task
+    // Where the domain tasks run: the CPU, or this process's GPU `gpu`
+    // (extraction and reduction there; the seams stay on the CPU). The
+    // surface is the same bytes either way.
+    enum class Device { cpu, gpu };
+    Device device = Device::cpu;
+    int gpu = 0;
 };
 
 enum class TaskKind : std::int32_t { domain = 0, seam = 1 };
@@ -111,6 +117,11 @@ struct TaskRecord {
     // near the seam, reduction and splice (SeamReport::Seconds).
     struct Stages {
         double generate = 0, extract = 0, reduce = 0, merge = 0, region = 0, splice = 0;
+        // A task run on a GPU: its index (-1: the CPU), and the seconds its
+        // input took to the device and its piece back (extract and reduce
+        // are then the device's).
+        std::int32_t gpu = -1;
+        double upload = 0, download = 0;
     } stages;
 };
 
@@ -129,10 +140,12 @@ using Progress = std::function<void(int, int, double)>;
 // Building it validates the configuration and reads any files (throws
 // tetiso::Error); every rank builds its own, and an MPI job checks that all
 // agree (Partition::fingerprint) before it starts.
+class Gpu;
+
 class Job {
 public:
     explicit Job(const JobConfig& config);
-    virtual ~Job() = default;
+    virtual ~Job();
 
     const JobConfig& config() const { return config_; }
     const Partition& partition() const { return *partition_; }
@@ -159,8 +172,14 @@ private:
         return options;
     }
 
+    // A domain task on this process's GPU.
+    Piece execute_on_gpu(int domain, TaskRecord& record, const ReduceOptions& options) const;
+
     JobConfig config_;
     std::unique_ptr<Partition> partition_;
+    // Made at the first domain task that runs on the GPU (rank 0 of an MPI
+    // job runs only seams, and needs none); kept for the next.
+    mutable std::unique_ptr<Gpu> gpu_;
     std::vector<TaskNode> tree_;
     float level_ = 0;
     ReduceOptions reduce_options_;

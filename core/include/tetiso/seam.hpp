@@ -27,9 +27,14 @@ Piece merge_all(std::vector<Piece> pieces);
 // Returns the number of vertices unlocked.
 std::size_t unlock_settled(Piece& piece, const EdgeDomains& domains_of_edge);
 
+// What reduces a region: tetiso::reduce when empty, or another function with
+// the same result (a Gpu's reduce).
+using Reducer = std::function<Piece(const Piece&, const ReduceOptions&, ReduceReport*)>;
+
 struct SeamOptions {
     bool reduce = true;
     ReduceOptions reduce_options;
+    Reducer reducer; // empty: tetiso::reduce
     // How far from the seam the reduction reaches, in edges. The rest of the
     // piece was reduced before and is left exactly as it is. Since the seams
     // re-measure the raw vertices (sample_rings), one ring reduces as far as
@@ -86,7 +91,8 @@ Piece seam(const Piece& a, const Piece& b, const EdgeDomains& domains_of_edge, c
 // edge is shared); all but the triangles around such vertices is reduced
 // then, by reduce_near's rules, and they wait for the seam that completes
 // them.
-Piece reduce_piece(const Piece& piece, const ReduceOptions& options, ReduceReport* report = nullptr);
+Piece reduce_piece(const Piece& piece, const ReduceOptions& options, ReduceReport* report = nullptr,
+                   const Reducer& reducer = {});
 
 // Reduces `piece` near the vertices marked in `seed` (see seam); exposed for
 // tests and for callers that unlock vertices by other means.

@@ -237,7 +237,7 @@ TETISO_HD inline bool fan_at_p_embedded(const NewFan& fan) {
         for (int g = 0; g < fan.count && !follows; ++g) follows = fan.ib[g] == fan.ia[f];
         if (!follows) first = f, open = true;
     }
-    Vec ray = fan.a[first] - fan.p;
+    Vec ray = Vec(fan.a[first]) - fan.p;
     ray = ray - dot(ray, m) * m;
     const Vec across = cross(m, ray);
     // Each side is measured the same way in both faces that hold it, so that
@@ -245,7 +245,7 @@ TETISO_HD inline bool fan_at_p_embedded(const NewFan& fan) {
     // border, the first side is the first face's own.
     int holding = 0;
     for (int f = 0; f < fan.count; ++f)
-        holding += holds_ray(fan.a[f] - fan.p, fan.b[f] - fan.p, ray, across, open && f == first);
+        holding += holds_ray(Vec(fan.a[f]) - fan.p, Vec(fan.b[f]) - fan.p, ray, across, open && f == first);
     return holding == 1;
 }
 
@@ -267,7 +267,7 @@ TETISO_HD inline bool ring_clear(const RoundView& m, i32 u, i32 w, const NewFan&
             const int h = at_v[j];
             if (norm2(fan.n[h]) == 0) continue;
             const i32 o = fan.ia[h] == v ? fan.ib[h] : fan.ia[h];
-            const Vec po = fan.ia[h] == v ? fan.b[h] : fan.a[h];
+            const Vec po = fan.ia[h] == v ? Vec(fan.b[h]) : Vec(fan.a[h]);
             bool overlap;
             if (x == o || y == o) {
                 // Across the edge (v, o): only a face folded flat onto h.
@@ -331,7 +331,11 @@ TETISO_HD inline bool clear_of_neighbours(const RoundView& m, i32 u, i32 w, bool
 // owns its corners (a test that fails half way must leave the owners as
 // they were). Past kMax the placements are computed again when written.
 struct Placements {
+#ifdef __CUDA_ARCH__
+    static constexpr int kMax = 64; // local memory is reserved for every thread the GPU can hold
+#else
     static constexpr int kMax = 256;
+#endif
     i32 sample[kMax], triangle[kMax];
     int count = 0;
     bool overflow = false;

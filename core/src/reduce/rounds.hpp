@@ -233,8 +233,9 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
             });
         }
         std::size_t evaluated = static_cast<std::size_t>(offered);
-        const i32 flips = exec.copy_if(st.offered, offered, [=, list = st.offered.data()] TETISO_HD(i64 k) {
-            return kind[list[k]] == kFlip;
+        const i32* offered_list = st.offered.data();
+        const i32 flips = exec.copy_if(st.offered, offered, [=] TETISO_HD(i64 k) {
+            return kind[offered_list[k]] == kFlip;
         }, st.flips);
         choose<true>(exec, sel, clear_view, st.flips, flips, s.nv, st.priority.data(), chosen, refused, FlipTest{});
         {

@@ -247,23 +247,31 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
             u8& st = state[wi];
             if (!st) return;
             const WindowSlot& slot = window[wi];
-            if (st == kTestOnly) {
-                if (test(slot.e, [](const i32*, int) { return false; }) == Verdict::kIllegal) refused[slot.e] = 1;
+            const bool test_only = st == kTestOnly;
+            if (!test_only) {
+                // Its own vertices first: a shared end is the commonest conflict.
+                bool first = true;
+                v.for_each_footprint<Flips>(slot, [&](i32 x) { first = first && reservation[x] == slot.rank; });
+                if (!first) return;
+                bool nearby = false; // an earlier operation nearby is undecided
+                v.for_each_footprint<Flips>(slot, [&](i32 x) {
+                    for (i32 j = 0, m = v.fans.nn(x); j < m && !nearby; ++j)
+                        nearby = reservation[v.fans.nbr(x, j)] < slot.rank;
+                });
+                if (nearby) return;
+                st |= kDecided;
+            }
+            // A decided operation's owned corners were clear when it reserved
+            // them, and only an earlier operation, all decided now, could have
+            // claimed them; a test-only one's were claimed. One call of the
+            // test either way (on the GPU each inlined copy of it costs every
+            // thread its stack frame).
+            const Verdict verdict = test(slot.e, [=](const i32*, int) { return !test_only; });
+            if (test_only) {
+                if (verdict == Verdict::kIllegal) refused[slot.e] = 1;
                 return;
             }
-            // Its own vertices first: a shared end is the commonest conflict.
-            bool first = true;
-            v.for_each_footprint<Flips>(slot, [&](i32 x) { first = first && reservation[x] == slot.rank; });
-            if (!first) return;
-            bool nearby = false; // an earlier operation nearby is undecided
-            v.for_each_footprint<Flips>(slot, [&](i32 x) {
-                for (i32 j = 0, m = v.fans.nn(x); j < m && !nearby; ++j) nearby = reservation[v.fans.nbr(x, j)] < slot.rank;
-            });
-            if (nearby) return;
-            st |= kDecided;
-            // Its owned corners were clear when it reserved them, and only an
-            // earlier operation, all decided now, could have claimed them.
-            if (test(slot.e, [](const i32*, int) { return true; }) != Verdict::kLegal) {
+            if (verdict != Verdict::kLegal) {
                 refused[slot.e] = 1;
                 return;
             }

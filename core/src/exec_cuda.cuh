@@ -1,0 +1,291 @@
+// The CUDA backend of the data-parallel drivers: the members of HostExec
+// (exec_host.hpp) over device memory, each one kernel or one CUB primitive on
+// the backend's stream. Every primitive has one result whatever the launch
+// configuration (integer sums and counts, CUB's stable radix sort and
+// order-keeping select), so a driver gives the host's bytes here.
+//
+// The host reads a scalar back only where a driver needs a size to go on (a
+// count, the new length of a list): each such read waits for the stream.
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include <cub/device/device_radix_sort.cuh>
+#include <cub/device/device_scan.cuh>
+#include <cub/device/device_select.cuh>
+#include <thrust/iterator/counting_iterator.h>
+
+#include "cuda_support.cuh"
+#include "hd.hpp"
+#include "parallel.hpp"
+
+namespace tetiso {
+
+namespace cuda_exec {
+
+// CUB calls a select operator with the element, here an index.
+template <class Keep>
+struct IndexPredicate {
+    Keep keep;
+    __host__ __device__ bool operator()(std::int64_t i) const { return keep(i); }
+};
+
+} // namespace cuda_exec
+
+class CudaExec {
+public:
+    using i32 = std::int32_t;
+    using i64 = std::int64_t;
+    using u32 = std::uint32_t;
+    using u64 = std::uint64_t;
+    using Grain = parallel::Grain;
+    static constexpr bool kHost = false;
+
+    template <class T>
+    using Array = cuda::DeviceArray<T>;
+
+    explicit CudaExec(cudaStream_t stream) : stream_(stream) {
+        cuda::check(cudaMallocHost(reinterpret_cast<void**>(&pinned_), sizeof(i64) * kScalars), "cudaMallocHost");
+        scalars_.resize(kScalars);
+    }
+    ~CudaExec() { cudaFreeHost(pinned_); }
+    CudaExec(const CudaExec&) = delete;
+    CudaExec& operator=(const CudaExec&) = delete;
+
+    cudaStream_t stream() const { return stream_; }
+
+    template <class Function>
+    void for_each(i64 n, const Function& function, Grain = Grain::kCheap) const {
+        cuda::for_each(stream_, n, function);
+    }
+
+    template <class Keep>
+    i32 filter(i64 n, const Keep& keep, Array<i32>& out) {
+        out.resize(static_cast<std::size_t>(n));
+        if (n == 0) return 0;
+        i64* count = scalars_.data();
+        const thrust::counting_iterator<i64> indices(0);
+        std::size_t bytes = 0;
+        cuda::check(cub::DeviceSelect::If(nullptr, bytes, indices, out.data(), count, n,
+                                          cuda_exec::IndexPredicate<Keep>{keep}, stream_),
+                    "select");
+        cuda::check(cub::DeviceSelect::If(temp(bytes), bytes, indices, out.data(), count, n,
+                                          cuda_exec::IndexPredicate<Keep>{keep}, stream_),
+                    "selecting indices");
+        const auto kept = static_cast<i32>(read(count));
+        out.resize(static_cast<std::size_t>(kept));
+        return kept;
+    }
+
+    template <class T, class Keep>
+    i32 copy_if(const Array<T>& in, i64 n, const Keep& keep, Array<T>& out) {
+        out.resize(static_cast<std::size_t>(n));
+        if (n == 0) return 0;
+        flags_.resize(static_cast<std::size_t>(n));
+        char* flags = flags_.data();
+        for_each(n, [=] __device__(i64 i) { flags[i] = keep(i) ? 1 : 0; });
+        i64* count = scalars_.data();
+        std::size_t bytes = 0;
+        cuda::check(cub::DeviceSelect::Flagged(nullptr, bytes, in.data(), flags, out.data(), count, n, stream_), "select");
+        cuda::check(cub::DeviceSelect::Flagged(temp(bytes), bytes, in.data(), flags, out.data(), count, n, stream_),
+                    "selecting elements");
+        const auto kept = static_cast<i32>(read(count));
+        out.resize(static_cast<std::size_t>(kept));
+        return kept;
+    }
+
+    template <class Keep>
+    i32 rank(i64 n, const Keep& keep, Array<i32>& rank) {
+        rank.resize(static_cast<std::size_t>(n) + 1);
+        counts_.resize(static_cast<std::size_t>(n) + 1);
+        i32* flag = counts_.data();
+        for_each(n + 1, [=] __device__(i64 i) { flag[i] = i < n && keep(i) ? 1 : 0; });
+        scan(flag, rank.data(), n + 1);
+        i32* r = rank.data();
+        const i32 kept = get(rank, n);
+        for_each(n, [=] __device__(i64 i) {
+            if (!flag[i]) r[i] = -1;
+        });
+        rank.resize(static_cast<std::size_t>(n));
+        return kept;
+    }
+
+    template <class Counted>
+    i64 count(i64 n, const Counted& counted) {
+        if (n == 0) return 0;
+        auto* total = reinterpret_cast<unsigned long long*>(scalars_.data());
+        cuda::check(cudaMemsetAsync(total, 0, sizeof *total, stream_), "cudaMemsetAsync");
+        for_each(n, [=] __device__(i64 i) {
+            if (counted(i)) atomicAdd(total, 1ull);
+        });
+        return read(reinterpret_cast<i64*>(total));
+    }
+
+    i32 exclusive_scan(const Array<i32>& counts, i64 n, Array<i32>& offsets) {
+        offsets.resize(static_cast<std::size_t>(n) + 1);
+        if (n > 0) scan(counts.data(), offsets.data(), n);
+        const i32* c = counts.data();
+        i32* o = offsets.data();
+        for_each(1, [=] __device__(i64) { o[n] = n > 0 ? o[n - 1] + c[n - 1] : 0; });
+        return get(offsets, n);
+    }
+
+    // A stable grouping by key (HostExec::group_by_key): the counts by
+    // atomic increments (an integer sum, the same in any order), the order
+    // by CUB's stable radix sort of (key, index).
+    template <class Key>
+    void group_by_key(i64 n, i64 groups, const Key& key, Array<i32>& first, Array<i32>& order, Array<i32>& scratch) {
+        scratch.resize(static_cast<std::size_t>(groups));
+        i32* count = scratch.data();
+        for_each(groups, [=] __device__(i64 g) { count[g] = 0; });
+        sort_keys_.resize(static_cast<std::size_t>(n));
+        sort_values_.resize(static_cast<std::size_t>(n));
+        i32* keys = sort_keys_.data();
+        i32* values = sort_values_.data();
+        for_each(n, [=] __device__(i64 i) {
+            const i32 k = key(i);
+            keys[i] = k;
+            values[i] = static_cast<i32>(i);
+            hd::atomic_add(count + k, 1);
+        });
+        exclusive_scan(scratch, groups, first);
+        order.resize(static_cast<std::size_t>(n));
+        if (n == 0) return;
+        sorted_keys_.resize(static_cast<std::size_t>(n));
+        const int bits = bits_for(groups);
+        std::size_t bytes = 0;
+        cuda::check(cub::DeviceRadixSort::SortPairs(nullptr, bytes, keys, sorted_keys_.data(), values, order.data(), n, 0,
+                                                    bits, stream_),
+                    "sort");
+        cuda::check(cub::DeviceRadixSort::SortPairs(temp(bytes), bytes, keys, sorted_keys_.data(), values, order.data(), n,
+                                                    0, bits, stream_),
+                    "grouping by key");
+    }
+
+    // order = ops (n edge ids) by descending priority, ties by descending
+    // first end, then descending second end: one radix sort of
+    // (~priority, ~first end), then the runs that still tie (two edges of
+    // one vertex with one priority: rare, and short) put in order.
+    void order_by_priority(const Array<i32>& ops, i64 n, const u32* priority, const i32* v0, const i32* v1,
+                           Array<i32>& order) {
+        order.resize(static_cast<std::size_t>(n));
+        if (n == 0) return;
+        wide_keys_.resize(static_cast<std::size_t>(n));
+        sorted_wide_keys_.resize(static_cast<std::size_t>(n));
+        u64* keys = wide_keys_.data();
+        const i32* list = ops.data();
+        for_each(n, [=] __device__(i64 k) {
+            const i32 e = list[k];
+            keys[k] = (static_cast<u64>(~priority[e]) << 32) | static_cast<u32>(~static_cast<u32>(v0[e]));
+        });
+        std::size_t bytes = 0;
+        cuda::check(cub::DeviceRadixSort::SortPairs(nullptr, bytes, keys, sorted_wide_keys_.data(), list, order.data(), n,
+                                                    0, 64, stream_),
+                    "sort");
+        cuda::check(cub::DeviceRadixSort::SortPairs(temp(bytes), bytes, keys, sorted_wide_keys_.data(), list,
+                                                    order.data(), n, 0, 64, stream_),
+                    "sorting by priority");
+        const u64* sorted = sorted_wide_keys_.data();
+        i32* o = order.data();
+        for_each(n, [=] __device__(i64 i) {
+            if ((i > 0 && sorted[i - 1] == sorted[i]) || i + 1 == n || sorted[i + 1] != sorted[i]) return;
+            i64 end = i + 1;
+            while (end < n && sorted[end] == sorted[i]) ++end;
+            for (i64 a = i + 1; a < end; ++a) { // insertion sort by descending second end
+                const i32 e = o[a];
+                i64 b = a;
+                for (; b > i && v1[o[b - 1]] < v1[e]; --b) o[b] = o[b - 1];
+                o[b] = e;
+            }
+        });
+    }
+
+    // Every operation enters the window at once: the choice does not depend
+    // on the width, and the device is filled best by all of them.
+    static i64 reservation_window(i64 n) { return n > 0 ? n : 1; }
+
+    template <class T>
+    void assign(Array<T>& a, i64 n, T value) const {
+        a.resize(static_cast<std::size_t>(n));
+        T* data = a.data();
+        for_each(n, [=] __device__(i64 i) { data[i] = value; });
+    }
+
+    template <class T>
+    T get(const Array<T>& a, i64 i) {
+        T value;
+        cuda::check(cudaMemcpyAsync(pinned_, a.data() + i, sizeof(T), cudaMemcpyDeviceToHost, stream_), "reading a value");
+        cuda::check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
+        std::memcpy(&value, pinned_, sizeof(T));
+        return value;
+    }
+    template <class T>
+    void set(Array<T>& a, i64 i, T value) {
+        T* at = a.data() + i;
+        for_each(1, [=] __device__(i64) { *at = value; });
+    }
+
+    template <class T, class Allocator>
+    void upload(const std::vector<T, Allocator>& host, Array<T>& a) const {
+        a.resize(host.size());
+        if (!host.empty())
+            cuda::check(cudaMemcpyAsync(a.data(), host.data(), host.size() * sizeof(T), cudaMemcpyHostToDevice, stream_),
+                        "uploading");
+        // Pageable host memory: the copy is staged, and `host` may go once
+        // this returns.
+        cuda::check(cudaStreamSynchronize(stream_), "uploading");
+    }
+    template <class T, class Allocator>
+    void download(const Array<T>& a, i64 n, std::vector<T, Allocator>& host) const {
+        host.resize(static_cast<std::size_t>(n));
+        if (n > 0)
+            cuda::check(cudaMemcpyAsync(host.data(), a.data(), static_cast<std::size_t>(n) * sizeof(T),
+                                        cudaMemcpyDeviceToHost, stream_),
+                        "downloading");
+        cuda::check(cudaStreamSynchronize(stream_), "downloading");
+    }
+
+    void sync() const { cuda::check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize"); }
+
+private:
+    static constexpr int kScalars = 4;
+
+    static int bits_for(i64 groups) {
+        int bits = 1;
+        while (bits < 31 && (i64{1} << bits) < groups) ++bits;
+        return bits;
+    }
+
+    void* temp(std::size_t bytes) {
+        temp_.resize(bytes > 0 ? bytes : 1);
+        return temp_.data();
+    }
+
+    void scan(const i32* in, i32* out, i64 n) {
+        std::size_t bytes = 0;
+        cuda::check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, in, out, n, stream_), "scan");
+        cuda::check(cub::DeviceScan::ExclusiveSum(temp(bytes), bytes, in, out, n, stream_), "scanning");
+    }
+
+    i64 read(const i64* device_scalar) {
+        cuda::check(cudaMemcpyAsync(pinned_, device_scalar, sizeof(i64), cudaMemcpyDeviceToHost, stream_),
+                    "reading a count");
+        cuda::check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
+        return *pinned_;
+    }
+
+    cudaStream_t stream_;
+    i64* pinned_ = nullptr;
+    Array<i64> scalars_;
+    Array<std::byte> temp_;
+    Array<char> flags_;
+    Array<i32> counts_, sort_keys_, sort_values_, sorted_keys_;
+    Array<u64> wide_keys_, sorted_wide_keys_;
+};
+
+} // namespace tetiso

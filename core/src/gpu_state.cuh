@@ -1,0 +1,83 @@
+// What one Gpu (tetiso/gpu.hpp) holds: its device and stream, the buffers
+// of its extraction and of its reduction, kept from task to task. Shared by
+// the CUDA units of extraction (extract_gpu.cu) and reduction
+// (reduce/reduce_gpu.cu), so that a domain's surface passes from one to the
+// other on the device.
+#pragma once
+
+#include <cuda_runtime.h>
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "cuda_support.cuh"
+#include "exec_cuda.cuh"
+#include "reduce/rounds.hpp"
+#include "tetiso/gpu.hpp"
+
+namespace tetiso {
+
+// An extracted surface left on the device: what a piece holds, in the
+// extraction's buffers (valid until the next extraction).
+struct DeviceSurface {
+    const float *x, *y, *z;
+    const EdgeKey* key;
+    const std::uint8_t* flags;
+    const std::int32_t* triangles;
+    std::int32_t vertices, triangle_count;
+    int domain;
+};
+
+// The passes of marching tetrahedra on the device (extract_gpu.cu).
+struct ExtractionBuffers {
+    template <class T>
+    using Array = cuda::DeviceArray<T>;
+    // The domain.
+    Array<float> x, y, z, f;
+    Array<GlobalId> gid;
+    Array<std::uint8_t> interface;
+    Array<EdgeKey> shared;
+    Array<std::int32_t> tets;
+    // Per node and per tetrahedron.
+    Array<std::uint8_t> above, pattern;
+    Array<std::uint32_t> crossings, first_crossing, triangles_per_tet, first_triangle;
+    // Crossings, then vertices.
+    Array<std::uint64_t> codes, sorted_codes, edges;
+    Array<float> vx, vy, vz, sx, sy, sz;
+    Array<EdgeKey> key, sorted_key;
+    Array<std::uint8_t> flags, sorted_flags;
+    Array<std::int32_t> corners, order, sorted_order, rank;
+    // Scalars the host reads: bad node, bad tetrahedron, unique count, unsorted flag.
+    Array<unsigned long long> scalars;
+    Array<std::byte> scratch; // CUB's temporary storage
+};
+
+struct Gpu::State {
+    explicit State(int device);
+    ~State();
+
+    int device = 0;
+    std::string description;
+    cudaStream_t stream = nullptr;
+    ExtractionBuffers extraction;
+    std::unique_ptr<CudaExec> exec;
+    reduction::ReductionState<CudaExec> reduction;
+    GpuTimings timings;
+
+    // Extraction up to a surface on the device; fills timings.upload and
+    // .compute (extract_gpu.cu).
+    DeviceSurface extract(const Domain& domain, float level);
+    DeviceSurface extract(const Decomposition& decomposition, int domain, const Field& field, float level);
+    // The surface as a piece; fills timings.download.
+    Piece download(const DeviceSurface& surface);
+
+    void use_device() const { cuda::check(cudaSetDevice(device), "cudaSetDevice"); }
+};
+
+inline double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+} // namespace tetiso

@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# The command line's GPU paths: `--device gpu` writes the bytes `--device cpu`
+# writes (compared with cmp), for run (alone and under mpirun), extract
+# --reduce and reduce, and its reports name the device. Where there is no GPU
+# (CI), asking for one must be a one-line error and exit status 2 with
+# nothing written. Usage: test_gpu_cli.sh PATH/TO/tetiso [mpiexec]
+set -u
+tetiso=$1
+mpiexec=${2:-}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+failures=0
+
+fail() {
+    echo "FAIL: $*"
+    failures=$((failures + 1))
+}
+
+# same WHAT ARGS...: the command with --device cpu and with --device gpu
+# writes identical surfaces.
+same() {
+    local what=$1
+    shift
+    "$tetiso" "$@" --device cpu -o "$work/cpu.ply" --report "$work/cpu.json" 2>"$work/err" || {
+        fail "$what (cpu): $(cat "$work/err")"
+        return
+    }
+    "$tetiso" "$@" --device gpu -o "$work/gpu.ply" --report "$work/gpu.json" 2>"$work/err" || {
+        fail "$what (gpu): $(cat "$work/err")"
+        return
+    }
+    cmp -s "$work/cpu.ply" "$work/gpu.ply" || fail "$what: the GPU's surface differs from the CPU's"
+    grep -q '"gpu' "$work/gpu.json" || fail "$what: the report does not name the GPU"
+}
+
+if ! "$tetiso" extract --lattice 8 --device gpu -o "$work/probe.ply" 2>"$work/err"; then
+    # No GPU here: a clear refusal from every command that takes --device.
+    "$tetiso" extract --lattice 8 --field sphere -o "$work/in.ply" || fail "extract on the CPU"
+    for args in "extract --lattice 8 --reduce" "run --lattice 10 --domains 2" "reduce $work/in.ply"; do
+        rm -f "$work/out.ply"
+        # shellcheck disable=SC2086
+        "$tetiso" $args --device gpu -o "$work/out.ply" 2>"$work/err"
+        status=$?
+        [ "$status" -eq 2 ] || fail "$args --device gpu: exit status $status, expected 2"
+        [ "$(wc -l <"$work/err")" -eq 1 ] || fail "$args --device gpu: stderr is not one line: $(cat "$work/err")"
+        grep -q -- "--device gpu: " "$work/err" || fail "$args --device gpu: the message does not say why: $(cat "$work/err")"
+        [ ! -e "$work/out.ply" ] || fail "$args --device gpu: left an output"
+    done
+    [ "$failures" -eq 0 ] && echo "no GPU: every --device gpu is a clear error" && exit 0
+    exit 1
+fi
+
+same "run, lattice" run --lattice 60 --domains 8 --quiet
+grep -q '"device": "gpu 0"' "$work/gpu.json" || fail "run: no task ran on gpu 0"
+same "run, gyroid in 27 domains" run --lattice 48 --domains 27 --field gyroid --quiet
+same "run, unstructured mesh" run --mesh "$(dirname "$0")/../../meshes/cube.1" --domains 4 --field sphere --level 1.5 --quiet
+same "extract --reduce" extract --lattice 60 --domains 4 --reduce
+"$tetiso" extract --lattice 50 --field torus -o "$work/raw.ply" || fail "extract"
+same "reduce" reduce "$work/raw.ply"
+if [ -n "$mpiexec" ]; then
+    # Three ranks, two of them workers on the one GPU, against one process
+    # on the CPU.
+    "$tetiso" run --lattice 60 --domains 8 --quiet -o "$work/alone.ply" || fail "run alone"
+    OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "$mpiexec" --oversubscribe -np 3 \
+        "$tetiso" run --lattice 60 --domains 8 --quiet --device gpu -o "$work/ranks.ply" 2>"$work/err" ||
+        fail "run under mpirun --device gpu: $(cat "$work/err")"
+    cmp -s "$work/alone.ply" "$work/ranks.ply" || fail "run under mpirun with the GPU differs from one CPU process"
+fi
+[ "$failures" -eq 0 ] && echo "the GPU wrote the CPU's bytes everywhere" && exit 0
+exit 1

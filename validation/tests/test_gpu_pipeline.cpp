@@ -1,0 +1,214 @@
+// A job's work on the GPU against the CPU's, byte for byte: lattice domains
+// of every built-in field and of an expression, from nothing to their reduced
+// piece with its interfaces locked and its samples kept; random values; an
+// unstructured mesh's domains; the reductions of seams' regions (pieces that
+// carry error bounds and raw-vertex samples); whole jobs with their domain
+// tasks on the GPU; and a bad domain's error. Skips where there is no GPU.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <functional>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "reduce_under_test.hpp"
+#include "tetiso/error.hpp"
+#include "tetiso/extract.hpp"
+#include "tetiso/field.hpp"
+#include "tetiso/gpu.hpp"
+#include "tetiso/lattice.hpp"
+#include "tetiso/mesh_partition.hpp"
+#include "tetiso/schedule.hpp"
+#include "tetiso/seam.hpp"
+#include "tetiso/tetgen.hpp"
+
+namespace tetiso {
+namespace {
+
+using test::same_piece;
+using test::the_gpu;
+
+ReduceOptions domain_options(double spacing, double bound = 0.25) {
+    ReduceOptions o;
+    o.max_error = bound * spacing;
+    o.keep_samples = true;
+    return o;
+}
+
+std::string error_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+
+struct LatticeCase {
+    const char* field;
+    std::int64_t n;
+    int domains;
+    double bound; // in spacings; 0: none
+};
+
+void PrintTo(const LatticeCase& c, std::ostream* out) {
+    *out << c.field << " N=" << c.n << " D=" << c.domains << " bound " << c.bound;
+}
+
+class GpuDomainTask : public ::testing::TestWithParam<LatticeCase> {};
+
+// A domain task as the job runs it: the GPU builds the domain, evaluates a
+// built-in field (an expression's values are uploaded), extracts and
+// reduces, and only the piece comes back.
+TEST_P(GpuDomainTask, IsTheCpuPieceByteForByte) {
+    const LatticeCase& c = GetParam();
+    const Lattice lattice(c.n);
+    const Decomposition decomposition(lattice, c.domains);
+    const auto field = make_field(c.field);
+    const auto level = static_cast<float>(field->default_level());
+    const ReduceOptions o = domain_options(lattice.spacing(), c.bound);
+    std::size_t locked = 0, reduced = 0;
+    for (int d = 0; d < decomposition.domain_count(); ++d) {
+        const Piece raw = extract(decomposition.make_domain(d, *field), level);
+        const Piece cpu = reduce(raw, o);
+        locked += static_cast<std::size_t>(std::count(cpu.flags.begin(), cpu.flags.end(), kLocked));
+        reduced += raw.triangle_count() - cpu.triangle_count();
+        EXPECT_TRUE(same_piece(cpu, the_gpu().extract_and_reduce(decomposition, d, *field, level, o))) << "domain " << d;
+    }
+    EXPECT_GT(reduced, 0u);
+    if (c.domains > 1) EXPECT_GT(locked, 0u); // the interfaces were crossed and stayed
+}
+
+INSTANTIATE_TEST_SUITE_P(Fields, GpuDomainTask,
+                         ::testing::Values(LatticeCase{"paper", 60, 8, 0.25}, LatticeCase{"paper", 48, 1, 0.0},
+                                           LatticeCase{"gyroid", 50, 27, 0.25}, LatticeCase{"sphere", 41, 8, 0.1},
+                                           LatticeCase{"torus", 40, 27, 0.25}, LatticeCase{"x+y-5", 21, 5, 0.25}));
+
+// Random values, a tenth of them exactly at the level: needles, zero-length
+// edges and clusters the reducer must clean up, on both devices alike.
+TEST(GpuPipeline, RandomValuesGiveTheCpuPiece) {
+    const Lattice lattice(20);
+    const Decomposition two(lattice, 2);
+    Domain domain = two.make_domain(1, *make_field("paper"));
+    for (unsigned seed = 1; seed <= 4; ++seed) {
+        std::mt19937 random(seed);
+        std::uniform_real_distribution<float> value(-1.0f, 1.0f);
+        const float level = seed == 1 ? 0.0f : value(random) * 0.5f;
+        for (float& f : domain.f) f = random() % 10 == 0 ? level : value(random);
+        const ReduceOptions o = domain_options(lattice.spacing());
+        EXPECT_TRUE(same_piece(reduce(extract(domain, level), o), the_gpu().extract_and_reduce(domain, level, o)))
+            << "seed " << seed;
+    }
+}
+
+// The unstructured cube mesh by the octant of each tetrahedron: shared-edge
+// lists lock the interfaces, and local numbering is not global.
+TEST(GpuPipeline, UnstructuredDomainsGiveTheCpuPieces) {
+    const auto field = make_field("sphere");
+    Domain mesh =
+        read_tetgen(TetgenSource{std::filesystem::path(TETISO_MESHES_DIR) / "cube.1", std::nullopt, field.get()});
+    std::vector<std::int32_t> part(mesh.tet_count());
+    for (std::size_t t = 0; t < part.size(); ++t) {
+        double centre = 0.0;
+        for (int k = 0; k < 4; ++k) centre += mesh.x[static_cast<std::size_t>(mesh.tets[4 * t + static_cast<std::size_t>(k)])];
+        part[t] = centre / 4 > 2.5 ? 1 : 0;
+    }
+    const double spacing = mean_edge_length(mesh);
+    const MeshPartition partition(std::move(mesh), part, "halves");
+    const ReduceOptions o = domain_options(spacing);
+    for (int d = 0; d < partition.domain_count(); ++d) {
+        const Domain domain = partition.make_domain(d);
+        std::string cpu_error;
+        Piece cpu;
+        try {
+            cpu = reduce(extract(domain, 1.5f), o);
+        } catch (const Error& e) {
+            cpu_error = e.what();
+        }
+        Piece gpu;
+        const std::string gpu_error = error_of([&] { gpu = the_gpu().extract_and_reduce(domain, 1.5f, o); });
+        EXPECT_EQ(cpu_error.empty() ? "(no error)" : cpu_error, gpu_error) << "domain " << d;
+        if (cpu_error.empty()) {
+            EXPECT_TRUE(same_piece(cpu, gpu)) << "domain " << d;
+        }
+    }
+}
+
+// Seams: each region a seam reduces (error bounds, the raw vertices the
+// pieces kept, a locked rim) reduced on both devices.
+TEST(GpuPipeline, SeamRegionsGiveTheCpuPieces) {
+    const Lattice lattice(50);
+    const Decomposition decomposition(lattice, 8);
+    const auto field = make_field("gyroid");
+    const auto level = static_cast<float>(field->default_level());
+    const ReduceOptions o = domain_options(lattice.spacing());
+    std::vector<Piece> pieces;
+    for (int d = 0; d < decomposition.domain_count(); ++d) {
+        Piece piece = reduce(extract(decomposition.make_domain(d, *field), level), o);
+        keep_samples_near_locked(piece, 1);
+        pieces.push_back(std::move(piece));
+    }
+    int regions = 0;
+    std::size_t carried = 0;
+    SeamOptions options;
+    options.reduce_options = o;
+    options.reducer = [&](const Piece& region, const ReduceOptions& ro, ReduceReport* report) {
+        ++regions;
+        carried += region.sample_count();
+        return test::reduce_under_test(region, ro, report); // the GPU's checked against the CPU's
+    };
+    const auto domains_of_edge = [&](GlobalId a, GlobalId b) { return decomposition.domains_of_edge(a, b); };
+    // Along the bisection tree: every seam joins two adjacent pieces.
+    std::function<Piece(int)> seam_node = [&](int node) -> Piece {
+        const DomainTreeNode& n = decomposition.tree()[static_cast<std::size_t>(node)];
+        if (n.left < 0) return pieces[static_cast<std::size_t>(n.first)];
+        return seam(seam_node(n.left), seam_node(n.right), domains_of_edge, options);
+    };
+    const Piece whole = seam_node(0);
+    EXPECT_EQ(regions, 7);
+    EXPECT_GT(carried, 0u); // the regions carried raw vertices to measure again
+    EXPECT_GT(whole.triangle_count(), 0u);
+}
+
+// The job with its domain tasks on the GPU writes the CPU job's surface.
+TEST(GpuPipeline, JobsOnTheGpuGiveTheCpuSurface) {
+    for (const auto& [field, n, domains] : {std::tuple{"paper", 60, 8}, std::tuple{"torus", 44, 27}}) {
+        JobConfig config;
+        config.lattice = n;
+        config.domains = domains;
+        config.field = field;
+        const JobResult cpu = run_local(Job(config), {});
+        config.device = JobConfig::Device::gpu;
+        const JobResult gpu = run_local(Job(config), {});
+        EXPECT_TRUE(same_piece(cpu.surface, gpu.surface)) << field;
+        std::size_t on_gpu = 0;
+        for (const TaskRecord& t : gpu.tasks) on_gpu += t.stages.gpu >= 0;
+        EXPECT_EQ(on_gpu, static_cast<std::size_t>(domains)) << "every domain task, no seam, ran on the GPU";
+    }
+}
+
+// A domain whose node has no finite position: extracted, then refused by the
+// reduction's input check, with the CPU's message.
+TEST(GpuPipeline, BadDomainGivesTheCpuError) {
+    const Lattice lattice(12);
+    const Decomposition one(lattice, 1);
+    const auto field = make_field("sphere");
+    Domain domain = one.make_domain(0, *field);
+    // A node next to the sphere, so that its edges cross.
+    std::size_t near = 0;
+    for (std::size_t v = 0; v < domain.f.size(); ++v)
+        if (std::abs(domain.f[v] - 2.0f) < std::abs(domain.f[near] - 2.0f)) near = v;
+    domain.x[near] = std::numeric_limits<float>::infinity();
+    const ReduceOptions o = domain_options(lattice.spacing());
+    const std::string cpu = error_of([&] { reduce(extract(domain, 2.0f), o); });
+    EXPECT_NE(cpu, "(no error)");
+    EXPECT_EQ(cpu, error_of([&] { the_gpu().extract_and_reduce(domain, 2.0f, o); }));
+    // The GPU stays usable.
+    const Domain good = one.make_domain(0, *field);
+    EXPECT_TRUE(same_piece(reduce(extract(good, 2.0f), o), the_gpu().extract_and_reduce(good, 2.0f, o)));
+}
+
+} // namespace
+} // namespace tetiso
