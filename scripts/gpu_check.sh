@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# The GPU checks and timings, for a machine with a CUDA GPU but no package
+# registry (the lent device machines: Ubuntu 24.04, CUDA 13, Open MPI, no
+# muparser, METIS, meshoptimizer or Debian's Google Benchmark). Two steps:
+#
+#   scripts/gpu_check.sh prepare      here (Debian 12, nvcc): build Release for
+#                                     sm_90 in build-gpu/ and gather the GPU
+#                                     test programs, bench_reduce_gpu, tetiso
+#                                     and the shared libraries the device
+#                                     lacks into .carry/gpu/ (carry it)
+#   scripts/gpu_check.sh run OUT [quick]
+#                                     there: every gpu-labelled test (the CPU
+#                                     reduction suite run on the GPU too, the
+#                                     domain pipeline, the extraction, the
+#                                     command line with cmp), then
+#                                     bench_reduce_gpu; logs and the benchmark's
+#                                     JSON under OUT. quick: the tests only.
+set -uo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+carry=$root/.carry/gpu
+programs=(tetiso test_reduce_gpu test_gpu_pipeline test_extract_gpu bench_reduce_gpu)
+
+prepare() {
+    set -e
+    cmake -S "$root" -B "$root/build-gpu" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CUDA_ARCHITECTURES=90 >/dev/null
+    ninja -C "$root/build-gpu" tetiso test_reduce_gpu test_gpu_pipeline test_extract_gpu bench_reduce_gpu
+    rm -rf "$carry"
+    mkdir -p "$carry/bin" "$carry/lib"
+    for p in "${programs[@]}"; do
+        find "$root/build-gpu" -name "$p" -type f -perm -u+x -exec cp {} "$carry/bin/" \;
+    done
+    # Debian's libraries that the device has not (or not under this soname).
+    for p in "${programs[@]}"; do ldd "$carry/bin/$p"; done | awk '{print $3}' | sort -u |
+        grep -E 'libmuparser|libmetis|libmeshoptimizer|libbenchmark|libmpi_cxx|libGKlib' |
+        while read -r lib; do cp -L "$lib" "$carry/lib/"; done
+    du -sh "$carry"
+}
+
+run() {
+    local out=$1 quick=${2:-}
+    mkdir -p "$out"
+    export LD_LIBRARY_PATH=$carry/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+    export OMP_WAIT_POLICY=passive
+    local bin=$carry/bin failed=0
+    nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader | tee "$out/machine.txt"
+    nproc >>"$out/machine.txt"
+    for t in test_extract_gpu test_gpu_pipeline test_reduce_gpu; do
+        local start=$SECONDS
+        if timeout 400 "$bin/$t" --gtest_brief=1 >"$out/$t.log" 2>&1; then
+            echo "$t: passed ($((SECONDS - start)) s)"
+        else
+            echo "$t: FAILED ($((SECONDS - start)) s)"
+            grep -E "Failure|differ|error|FAILED|Expected|Which is|CUDA" "$out/$t.log" | head -40
+            failed=1
+        fi
+    done
+    local start=$SECONDS
+    if timeout 400 "$root/validation/cli/test_gpu_cli.sh" "$bin/tetiso" "$(command -v mpirun)" >"$out/cli.log" 2>&1; then
+        echo "test_gpu_cli.sh: passed ($((SECONDS - start)) s)"
+    else
+        echo "test_gpu_cli.sh: FAILED"
+        tail -20 "$out/cli.log"
+        failed=1
+    fi
+    [ -n "$quick" ] && return $failed
+    start=$SECONDS
+    timeout 500 "$bin/bench_reduce_gpu" --benchmark_repetitions=5 --benchmark_out="$out/bench_reduce_gpu.json" \
+        --benchmark_out_format=json >"$out/bench.log" 2>&1 || failed=1
+    echo "bench_reduce_gpu: $((SECONDS - start)) s"
+    grep -E "median|byte for byte|DIFFERS" "$out/bench.log"
+    return $failed
+}
+
+case ${1:-} in
+prepare) prepare ;;
+run) run "${2:?usage: gpu_check.sh run OUT [quick]}" "${3:-}" ;;
+*)
+    echo "usage: scripts/gpu_check.sh prepare | run OUT [quick]" >&2
+    exit 2
+    ;;
+esac
