@@ -27,7 +27,7 @@ prepare() {
     rm -rf "$carry"
     mkdir -p "$carry/bin" "$carry/lib"
     for p in "${programs[@]}"; do
-        find "$root/build-gpu" -name "$p" -type f -perm -u+x -exec cp {} "$carry/bin/" \;
+        find "$root/build-gpu/" -name "$p" -type f -perm -u+x -exec cp {} "$carry/bin/" \;
     done
     # Debian's libraries that the device has not (or not under this soname).
     for p in "${programs[@]}"; do ldd "$carry/bin/$p"; done | awk '{print $3}' | sort -u |

@@ -10,15 +10,24 @@
 
 #include <cuda_runtime.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <map>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <cub/device/device_radix_sort.cuh>
+#include <cub/device/device_reduce.cuh>
 #include <cub/device/device_scan.cuh>
 #include <cub/device/device_select.cuh>
 #include <thrust/iterator/counting_iterator.h>
+#include <thrust/iterator/transform_iterator.h>
 
 #include "cuda_support.cuh"
 #include "hd.hpp"
@@ -33,6 +42,47 @@ template <class Keep>
 struct IndexPredicate {
     Keep keep;
     __host__ __device__ bool operator()(std::int64_t i) const { return keep(i); }
+};
+
+// An index's count, 1 or 0, for a sum.
+template <class Counted>
+struct IndexCount {
+    Counted counted;
+    __host__ __device__ std::int64_t operator()(std::int64_t i) const { return counted(i) ? 1 : 0; }
+};
+
+// With TETISO_GPU_PROFILE set, every primitive waits for the device before
+// and after it and adds its seconds to its call site's line of a table,
+// printed to stderr when the backend goes: where a driver's time goes on
+// the device, by line of the driver. Off, it costs a branch.
+class Profile {
+public:
+    Profile() : on_(std::getenv("TETISO_GPU_PROFILE") != nullptr) {}
+    ~Profile() {
+        if (!on_ || sites_.empty()) return;
+        std::vector<std::pair<std::string, Site>> rows(sites_.begin(), sites_.end());
+        std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a.second.seconds > b.second.seconds; });
+        double total = 0;
+        for (const auto& row : rows) total += row.second.seconds;
+        std::fprintf(stderr, "tetiso GPU profile: %.3f s in primitives\n", total);
+        for (const auto& [where, site] : rows)
+            std::fprintf(stderr, "  %9.3f ms %8ld calls  %s\n", site.seconds * 1e3, site.calls, where.c_str());
+    }
+    bool on() const { return on_; }
+    void add(const char* what, const char* file, int line, double seconds) {
+        const char* base = std::strrchr(file, '/');
+        Site& site = sites_[std::string(what) + " " + (base ? base + 1 : file) + ":" + std::to_string(line)];
+        site.seconds += seconds;
+        ++site.calls;
+    }
+
+private:
+    struct Site {
+        double seconds = 0;
+        long calls = 0;
+    };
+    bool on_;
+    std::map<std::string, Site> sites_;
 };
 
 } // namespace cuda_exec
@@ -59,13 +109,70 @@ public:
 
     cudaStream_t stream() const { return stream_; }
 
+    // Times one primitive for the profile (see cuda_exec::Profile).
+    class Timed {
+    public:
+        Timed(const CudaExec& exec, const char* what, const char* file, int line)
+            : exec_(exec), what_(what), file_(file), line_(line) {
+            if (!exec_.profile_.on()) return;
+            cudaStreamSynchronize(exec_.stream_);
+            start_ = std::chrono::steady_clock::now();
+        }
+        ~Timed() {
+            if (!exec_.profile_.on()) return;
+            cudaStreamSynchronize(exec_.stream_);
+            exec_.profile_.add(what_, file_, line_,
+                               std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count());
+        }
+
+    private:
+        const CudaExec& exec_;
+        const char *what_, *file_;
+        int line_;
+        std::chrono::steady_clock::time_point start_;
+    };
+
     template <class Function>
-    void for_each(i64 n, const Function& function, Grain = Grain::kCheap) const {
+    void for_each(i64 n, const Function& function, Grain = Grain::kCheap, const char* file = __builtin_FILE(), int line = __builtin_LINE()) const {
+        const Timed timed(*this, "for_each", file, line);
         cuda::for_each(stream_, n, function);
     }
 
+    // function(i) for i < *n, n in device memory (at most max_n): a loop
+    // whose size the device set, launched without the host reading it.
+    template <class Function>
+    void for_each_of(const i64* n, i64 max_n, const Function& function, Grain = Grain::kCheap,
+                     const char* file = __builtin_FILE(), int line = __builtin_LINE()) const {
+        const Timed timed(*this, "for_each_of", file, line);
+        if (max_n <= 0) return;
+        cuda::for_each(stream_, max_n, [=] __device__(i64 i) {
+            if (i < *n) function(i);
+        });
+    }
+
+    // out = the elements in[i], i < *n_in, with keep(i), in no particular
+    // order (each slot knows its own rank: the loops that read them do not
+    // care); *n_out = their number. Sizes in device memory.
+    template <class T, class Keep>
+    void compact(const T* in, const i64* n_in, i64 max_n, const Keep& keep, T* out, i64* n_out,
+                 const char* file = __builtin_FILE(), int line = __builtin_LINE()) const {
+        const Timed timed(*this, "compact", file, line);
+        cuda::check(cudaMemsetAsync(n_out, 0, sizeof(i64), stream_), "cudaMemsetAsync");
+        if (max_n <= 0) return;
+        auto* count = reinterpret_cast<unsigned long long*>(n_out);
+        cuda::for_each(stream_, max_n, [=] __device__(i64 i) {
+            if (i < *n_in && keep(i)) out[atomicAdd(count, 1ull)] = in[i];
+        });
+    }
+
+    // Steps of a device-side loop between two reads of its state by the host:
+    // a read waits for the device, a step past the loop's end costs a few
+    // empty launches.
+    static int steps_between_checks() { return 8; }
+
     template <class Keep>
-    i32 filter(i64 n, const Keep& keep, Array<i32>& out) {
+    i32 filter(i64 n, const Keep& keep, Array<i32>& out, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "filter", file, line);
         out.resize(static_cast<std::size_t>(n));
         if (n == 0) return 0;
         i64* count = scalars_.data();
@@ -83,12 +190,13 @@ public:
     }
 
     template <class T, class Keep>
-    i32 copy_if(const Array<T>& in, i64 n, const Keep& keep, Array<T>& out) {
+    i32 copy_if(const Array<T>& in, i64 n, const Keep& keep, Array<T>& out, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "copy_if", file, line);
         out.resize(static_cast<std::size_t>(n));
         if (n == 0) return 0;
         flags_.resize(static_cast<std::size_t>(n));
         char* flags = flags_.data();
-        for_each(n, [=] __device__(i64 i) { flags[i] = keep(i) ? 1 : 0; });
+        cuda::for_each(stream_, n, [=] __device__(i64 i) { flags[i] = keep(i) ? 1 : 0; });
         i64* count = scalars_.data();
         std::size_t bytes = 0;
         cuda::check(cub::DeviceSelect::Flagged(nullptr, bytes, in.data(), flags, out.data(), count, n, stream_), "select");
@@ -100,15 +208,16 @@ public:
     }
 
     template <class Keep>
-    i32 rank(i64 n, const Keep& keep, Array<i32>& rank) {
+    i32 rank(i64 n, const Keep& keep, Array<i32>& rank, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "rank", file, line);
         rank.resize(static_cast<std::size_t>(n) + 1);
         counts_.resize(static_cast<std::size_t>(n) + 1);
         i32* flag = counts_.data();
-        for_each(n + 1, [=] __device__(i64 i) { flag[i] = i < n && keep(i) ? 1 : 0; });
+        cuda::for_each(stream_, n + 1, [=] __device__(i64 i) { flag[i] = i < n && keep(i) ? 1 : 0; });
         scan(flag, rank.data(), n + 1);
         i32* r = rank.data();
         const i32 kept = get(rank, n);
-        for_each(n, [=] __device__(i64 i) {
+        cuda::for_each(stream_, n, [=] __device__(i64 i) {
             if (!flag[i]) r[i] = -1;
         });
         rank.resize(static_cast<std::size_t>(n));
@@ -116,22 +225,25 @@ public:
     }
 
     template <class Counted>
-    i64 count(i64 n, const Counted& counted) {
+    i64 count(i64 n, const Counted& counted, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "count", file, line);
         if (n == 0) return 0;
-        auto* total = reinterpret_cast<unsigned long long*>(scalars_.data());
-        cuda::check(cudaMemsetAsync(total, 0, sizeof *total, stream_), "cudaMemsetAsync");
-        for_each(n, [=] __device__(i64 i) {
-            if (counted(i)) atomicAdd(total, 1ull);
-        });
-        return read(reinterpret_cast<i64*>(total));
+        i64* total = scalars_.data();
+        const auto counts = thrust::make_transform_iterator(thrust::counting_iterator<i64>(0),
+                                                            cuda_exec::IndexCount<Counted>{counted});
+        std::size_t bytes = 0;
+        cuda::check(cub::DeviceReduce::Sum(nullptr, bytes, counts, total, n, stream_), "sum");
+        cuda::check(cub::DeviceReduce::Sum(temp(bytes), bytes, counts, total, n, stream_), "counting");
+        return read(total);
     }
 
-    i32 exclusive_scan(const Array<i32>& counts, i64 n, Array<i32>& offsets) {
+    i32 exclusive_scan(const Array<i32>& counts, i64 n, Array<i32>& offsets, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "exclusive_scan", file, line);
         offsets.resize(static_cast<std::size_t>(n) + 1);
         if (n > 0) scan(counts.data(), offsets.data(), n);
         const i32* c = counts.data();
         i32* o = offsets.data();
-        for_each(1, [=] __device__(i64) { o[n] = n > 0 ? o[n - 1] + c[n - 1] : 0; });
+        cuda::for_each(stream_, 1, [=] __device__(i64) { o[n] = n > 0 ? o[n - 1] + c[n - 1] : 0; });
         return get(offsets, n);
     }
 
@@ -139,15 +251,16 @@ public:
     // atomic increments (an integer sum, the same in any order), the order
     // by CUB's stable radix sort of (key, index).
     template <class Key>
-    void group_by_key(i64 n, i64 groups, const Key& key, Array<i32>& first, Array<i32>& order, Array<i32>& scratch) {
+    void group_by_key(i64 n, i64 groups, const Key& key, Array<i32>& first, Array<i32>& order, Array<i32>& scratch, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "group_by_key", file, line);
         scratch.resize(static_cast<std::size_t>(groups));
         i32* count = scratch.data();
-        for_each(groups, [=] __device__(i64 g) { count[g] = 0; });
+        cuda::for_each(stream_, groups, [=] __device__(i64 g) { count[g] = 0; });
         sort_keys_.resize(static_cast<std::size_t>(n));
         sort_values_.resize(static_cast<std::size_t>(n));
         i32* keys = sort_keys_.data();
         i32* values = sort_values_.data();
-        for_each(n, [=] __device__(i64 i) {
+        cuda::for_each(stream_, n, [=] __device__(i64 i) {
             const i32 k = key(i);
             keys[i] = k;
             values[i] = static_cast<i32>(i);
@@ -172,14 +285,15 @@ public:
     // (~priority, ~first end), then the runs that still tie (two edges of
     // one vertex with one priority: rare, and short) put in order.
     void order_by_priority(const Array<i32>& ops, i64 n, const u32* priority, const i32* v0, const i32* v1,
-                           Array<i32>& order) {
+                           Array<i32>& order, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "order_by_priority", file, line);
         order.resize(static_cast<std::size_t>(n));
         if (n == 0) return;
         wide_keys_.resize(static_cast<std::size_t>(n));
         sorted_wide_keys_.resize(static_cast<std::size_t>(n));
         u64* keys = wide_keys_.data();
         const i32* list = ops.data();
-        for_each(n, [=] __device__(i64 k) {
+        cuda::for_each(stream_, n, [=] __device__(i64 k) {
             const i32 e = list[k];
             keys[k] = (static_cast<u64>(~priority[e]) << 32) | static_cast<u32>(~static_cast<u32>(v0[e]));
         });
@@ -192,7 +306,7 @@ public:
                     "sorting by priority");
         const u64* sorted = sorted_wide_keys_.data();
         i32* o = order.data();
-        for_each(n, [=] __device__(i64 i) {
+        cuda::for_each(stream_, n, [=] __device__(i64 i) {
             if ((i > 0 && sorted[i - 1] == sorted[i]) || i + 1 == n || sorted[i + 1] != sorted[i]) return;
             i64 end = i + 1;
             while (end < n && sorted[end] == sorted[i]) ++end;
@@ -210,14 +324,16 @@ public:
     static i64 reservation_window(i64 n) { return n > 0 ? n : 1; }
 
     template <class T>
-    void assign(Array<T>& a, i64 n, T value) const {
+    void assign(Array<T>& a, i64 n, T value, const char* file = __builtin_FILE(), int line = __builtin_LINE()) const {
+        const Timed timed(*this, "assign", file, line);
         a.resize(static_cast<std::size_t>(n));
         T* data = a.data();
-        for_each(n, [=] __device__(i64 i) { data[i] = value; });
+        cuda::for_each(stream_, n, [=] __device__(i64 i) { data[i] = value; });
     }
 
     template <class T>
-    T get(const Array<T>& a, i64 i) {
+    T get(const Array<T>& a, i64 i, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "get", file, line);
         T value;
         cuda::check(cudaMemcpyAsync(pinned_, a.data() + i, sizeof(T), cudaMemcpyDeviceToHost, stream_), "reading a value");
         cuda::check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
@@ -227,11 +343,12 @@ public:
     template <class T>
     void set(Array<T>& a, i64 i, T value) {
         T* at = a.data() + i;
-        for_each(1, [=] __device__(i64) { *at = value; });
+        cuda::for_each(stream_, 1, [=] __device__(i64) { *at = value; });
     }
 
     template <class T, class Allocator>
-    void upload(const std::vector<T, Allocator>& host, Array<T>& a) const {
+    void upload(const std::vector<T, Allocator>& host, Array<T>& a, const char* file = __builtin_FILE(), int line = __builtin_LINE()) const {
+        const Timed timed(*this, "upload", file, line);
         a.resize(host.size());
         if (!host.empty())
             cuda::check(cudaMemcpyAsync(a.data(), host.data(), host.size() * sizeof(T), cudaMemcpyHostToDevice, stream_),
@@ -241,7 +358,8 @@ public:
         cuda::check(cudaStreamSynchronize(stream_), "uploading");
     }
     template <class T, class Allocator>
-    void download(const Array<T>& a, i64 n, std::vector<T, Allocator>& host) const {
+    void download(const Array<T>& a, i64 n, std::vector<T, Allocator>& host, const char* file = __builtin_FILE(), int line = __builtin_LINE()) const {
+        const Timed timed(*this, "download", file, line);
         host.resize(static_cast<std::size_t>(n));
         if (n > 0)
             cuda::check(cudaMemcpyAsync(host.data(), a.data(), static_cast<std::size_t>(n) * sizeof(T),
@@ -250,7 +368,8 @@ public:
         cuda::check(cudaStreamSynchronize(stream_), "downloading");
     }
 
-    void sync() const { cuda::check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize"); }
+    void sync(const char* file = __builtin_FILE(), int line = __builtin_LINE()) const {
+        const Timed timed(*this, "sync", file, line); cuda::check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize"); }
 
 private:
     static constexpr int kScalars = 4;
@@ -280,6 +399,7 @@ private:
     }
 
     cudaStream_t stream_;
+    mutable cuda_exec::Profile profile_;
     i64* pinned_ = nullptr;
     Array<i64> scalars_;
     Array<std::byte> temp_;

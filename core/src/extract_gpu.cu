@@ -45,6 +45,11 @@ using i32 = std::int32_t;
 using cuda::check;
 using cuda::DeviceArray;
 
+// Each GPU thread's stack: the largest frame of the reduction's kernels (the
+// legality test, 7.4 KB on sm_90 with nvcc 13) with room to spare. The
+// device reserves it for every thread it can hold (about 2 GB on an H100).
+constexpr std::size_t kStackBytes = 8 * 1024;
+
 void check_cuda(cudaError_t status, const char* what) { check(status, what); }
 
 // The case table as the kernels read it: per pattern, the crossing count and
@@ -448,7 +453,16 @@ Gpu::State::State(int device_index) : device(device_index) {
     const GpuInfo info = gpu_info(device_index);
     if (!info.available) throw Error("GPU: " + info.description);
     description = info.description;
+    // The reduction's legality tests keep a collapse's new faces on the
+    // stack (several KB a thread). By default the driver grows local memory
+    // for such a launch and shrinks it after, which cost every launch of
+    // them about half a millisecond, whatever its size; keep it grown. Too
+    // late where this process already uses the device (another Gpu of it):
+    // then the stack limit alone, set below, spares the resizing.
+    cudaInitDevice(device_index, cudaDeviceLmemResizeToMax, 0);
+    cudaGetLastError();
     use_device();
+    check_cuda(cudaDeviceSetLimit(cudaLimitStackSize, kStackBytes), "setting the GPU threads' stack size");
     check_cuda(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking), "cudaStreamCreate");
     const CaseTable table = make_case_table();
     check_cuda(cudaMemcpyToSymbol(c_cases, &table, sizeof table), "copying the case table");

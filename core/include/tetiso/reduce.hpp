@@ -99,6 +99,9 @@ struct ReduceRound {
     std::size_t evaluated = 0;
     std::size_t collapses = 0;
     std::size_t flips = 0;
+    // Steps of the choice by reservations, collapses and flips together (0
+    // where the host swept in order): what a round waits for on a GPU.
+    std::size_t selection_steps = 0;
     // The surface at the start of the round.
     std::size_t vertices = 0;
     std::size_t triangles = 0;

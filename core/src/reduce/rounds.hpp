@@ -204,6 +204,7 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         Selection<Exec>& sel = st.selection;
         exec.assign(sel.claimed, s.nv, i32{0});
         sel.stamp = 0;
+        sel.steps = 0;
         const SelectView select_view{fans, edges, st.cones.data(), sel.claimed.data(), 0};
         i32* owner = st.samples.on ? st.samples.owner.data() : nullptr;
         choose<false>(exec, sel, select_view, st.candidates, candidates, s.nv, st.priority.data(), chosen, refused,
@@ -250,6 +251,7 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
                 exec.count(candidates, [=] TETISO_HD(i64 k) { return kind[list[k]] != kPending; }));
         }
         stats.candidates = static_cast<std::size_t>(candidates) + static_cast<std::size_t>(flips);
+        stats.selection_steps = sel.steps;
         stats.evaluated = evaluated;
         seconds.select += since(t0);
         t0 = clock::now();

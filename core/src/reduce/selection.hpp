@@ -143,11 +143,13 @@ struct Selection {
     Array<i32> ends; // the sweep's operations' ends, in its order
     Array<WindowSlot> window, waiting;
     Array<u8> state;
+    Array<i64> held; // the sizes of window and waiting (choose_by_reservations)
     i32 stamp = 0;
     // Tests only: the reservations on one host thread too, with this window
     // (0: the backend's).
     bool always_reservations = false;
     i64 window_override = 0;
+    std::size_t steps = 0; // reservation steps since the counter was reset
 };
 
 // The sequential greedy choice on the host: operations in descending
@@ -205,91 +207,112 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
     exec.assign(sel.reservation, nv, kNoReservation);
     i32* reservation = sel.reservation.data();
     const i64 width = sel.window_override > 0 ? sel.window_override : exec.reservation_window(n);
-    sel.window.resize(static_cast<std::size_t>(std::min<i64>(width, n)));
+    const i64 capacity = std::min<i64>(width, n);
+    sel.window.resize(static_cast<std::size_t>(capacity));
+    sel.waiting.resize(static_cast<std::size_t>(capacity));
+    sel.state.resize(static_cast<std::size_t>(capacity));
+    // The window's size lives where its loops run (on the device, so that
+    // several steps go by without the host reading it): held[0] the
+    // window's, held[1] the waiting list's, swapped with them each step.
+    exec.assign(sel.held, 2, i64{0});
     // kTestOnly: blocked by a corner it would own, claimed by an earlier
     // choice (or owning too many); tested only to tell refused from blocked,
     // as the sweep does.
     constexpr u8 kReserved = 1, kDecided = 2, kTaken = 4, kTestOnly = 8;
-    i64 next = 0, held = 0;
+    i64 next = 0, held = 0; // held: the window's size, as the host last read it
+    int current = 0;        // which of held[0], held[1] is the window's
     while (next < n || held > 0) {
-        const i64 entering = std::min<i64>(width - held, n - next);
-        {
-            WindowSlot* window = sel.window.data() + held;
+        if (next < n && held < width) {
+            const i64 entering = std::min<i64>(width - held, n - next);
+            WindowSlot* window = current == 0 ? sel.window.data() : sel.waiting.data();
+            WindowSlot* at = window + held;
             const i32* order = sel.order.data() + next;
             const i32 first_rank = static_cast<i32>(next);
             exec.for_each(entering, [=] TETISO_HD(i64 k) {
-                window[k] = {first_rank + static_cast<i32>(k), order[k], -1, -1, -1};
+                at[k] = {first_rank + static_cast<i32>(k), order[k], -1, -1, -1};
             });
+            next += entering;
+            held += entering;
+            exec.set(sel.held, current, held);
         }
-        next += entering;
-        const i64 nw = held + entering;
-        exec.assign(sel.state, nw, u8{0});
-        WindowSlot* window = sel.window.data();
-        u8* state = sel.state.data();
-        exec.for_each(nw, [=] TETISO_HD(i64 wi) {
-            WindowSlot& slot = window[wi];
-            if (slot.u < 0) {
-                slot.u = v.edges.v0[slot.e];
-                slot.w = v.edges.v1[slot.e];
-            }
-            i32 vs[4];
-            if (!v.all_free(vs, v.touched<Flips>(slot.e, slot.u, slot.w, vs))) return; // blocked: decided for good
-            i32 owned[kMaxOwned];
-            slot.owned_count = v.owned<Flips>(slot.e, owned);
-            if (slot.owned_count < 0 || !v.all_free(owned, slot.owned_count)) {
-                state[wi] = kTestOnly;
-                return;
-            }
-            state[wi] = kReserved;
-            v.for_each_footprint<Flips>(slot, [&](i32 x) { hd::atomic_min(reservation + x, slot.rank); });
-        }, Grain::kWindow);
-        exec.for_each(nw, [=] TETISO_HD(i64 wi) {
-            u8& st = state[wi];
-            if (!st) return;
-            const WindowSlot& slot = window[wi];
-            const bool test_only = st == kTestOnly;
-            if (!test_only) {
-                // Its own vertices first: a shared end is the commonest conflict.
-                bool first = true;
-                v.for_each_footprint<Flips>(slot, [&](i32 x) { first = first && reservation[x] == slot.rank; });
-                if (!first) return;
-                bool nearby = false; // an earlier operation nearby is undecided
-                v.for_each_footprint<Flips>(slot, [&](i32 x) {
-                    for (i32 j = 0, m = v.fans.nn(x); j < m && !nearby; ++j)
-                        nearby = reservation[v.fans.nbr(x, j)] < slot.rank;
-                });
-                if (nearby) return;
-                st |= kDecided;
-            }
-            // A decided operation's owned corners were clear when it reserved
-            // them, and only an earlier operation, all decided now, could have
-            // claimed them; a test-only one's were claimed. One call of the
-            // test either way (on the GPU each inlined copy of it costs every
-            // thread its stack frame).
-            const Verdict verdict = test(slot.e, [=](const i32*, int) { return !test_only; });
-            if (test_only) {
-                if (verdict == Verdict::kIllegal) refused[slot.e] = 1;
-                return;
-            }
-            if (verdict != Verdict::kLegal) {
-                refused[slot.e] = 1;
-                return;
-            }
-            chosen[slot.e] = kChosen;
-            st |= kTaken;
-        }, Grain::kTests);
-        exec.for_each(nw, [=] TETISO_HD(i64 wi) {
-            const u8 st = state[wi];
-            if (!st || st == kTestOnly) return;
-            const WindowSlot& slot = window[wi];
-            v.for_each_footprint<Flips>(slot, [&](i32 x) { hd::atomic_store(reservation + x, kNoReservation); });
-            if (st & kTaken) v.claim_around<Flips>(slot.e);
-        }, Grain::kWindow);
-        // The waiting keep their order, ahead of the operations still to
-        // enter: the window stays sorted by rank.
-        held = exec.copy_if(sel.window, nw, [=] TETISO_HD(i64 wi) { return state[wi] == kReserved; }, sel.waiting);
-        sel.window.swap(sel.waiting);
-        sel.window.resize(static_cast<std::size_t>(std::min<i64>(width, n)));
+        // While operations still wait to enter, the host must know the
+        // window's size after each step; once all are in, the backend may run
+        // several steps before it looks.
+        const int steps = next < n ? 1 : exec.steps_between_checks();
+        for (int step = 0; step < steps; ++step) {
+            ++sel.steps;
+            WindowSlot* window = current == 0 ? sel.window.data() : sel.waiting.data();
+            WindowSlot* waiting = current == 0 ? sel.waiting.data() : sel.window.data();
+            i64* size = sel.held.data() + current;
+            i64* waiting_size = sel.held.data() + (1 - current);
+            u8* state = sel.state.data();
+            exec.for_each_of(size, capacity, [=] TETISO_HD(i64 wi) {
+                WindowSlot& slot = window[wi];
+                state[wi] = 0;
+                if (slot.u < 0) {
+                    slot.u = v.edges.v0[slot.e];
+                    slot.w = v.edges.v1[slot.e];
+                }
+                i32 vs[4];
+                if (!v.all_free(vs, v.touched<Flips>(slot.e, slot.u, slot.w, vs))) return; // blocked: decided for good
+                i32 owned[kMaxOwned];
+                slot.owned_count = v.owned<Flips>(slot.e, owned);
+                if (slot.owned_count < 0 || !v.all_free(owned, slot.owned_count)) {
+                    state[wi] = kTestOnly;
+                    return;
+                }
+                state[wi] = kReserved;
+                v.for_each_footprint<Flips>(slot, [&](i32 x) { hd::atomic_min(reservation + x, slot.rank); });
+            }, Grain::kWindow);
+            exec.for_each_of(size, capacity, [=] TETISO_HD(i64 wi) {
+                u8& st = state[wi];
+                if (!st) return;
+                const WindowSlot& slot = window[wi];
+                const bool test_only = st == kTestOnly;
+                if (!test_only) {
+                    // Its own vertices first: a shared end is the commonest conflict.
+                    bool first = true;
+                    v.for_each_footprint<Flips>(slot, [&](i32 x) { first = first && reservation[x] == slot.rank; });
+                    if (!first) return;
+                    bool nearby = false; // an earlier operation nearby is undecided
+                    v.for_each_footprint<Flips>(slot, [&](i32 x) {
+                        for (i32 j = 0, m = v.fans.nn(x); j < m && !nearby; ++j)
+                            nearby = reservation[v.fans.nbr(x, j)] < slot.rank;
+                    });
+                    if (nearby) return;
+                    st |= kDecided;
+                }
+                // A decided operation's owned corners were clear when it
+                // reserved them, and only an earlier operation, all decided
+                // now, could have claimed them; a test-only one's were
+                // claimed. One call of the test either way (on the GPU each
+                // inlined copy of it costs every thread its stack frame).
+                const Verdict verdict = test(slot.e, [=](const i32*, int) { return !test_only; });
+                if (test_only) {
+                    if (verdict == Verdict::kIllegal) refused[slot.e] = 1;
+                    return;
+                }
+                if (verdict != Verdict::kLegal) {
+                    refused[slot.e] = 1;
+                    return;
+                }
+                chosen[slot.e] = kChosen;
+                st |= kTaken;
+            }, Grain::kTests);
+            exec.for_each_of(size, capacity, [=] TETISO_HD(i64 wi) {
+                const u8 st = state[wi];
+                if (!st || st == kTestOnly) return;
+                const WindowSlot& slot = window[wi];
+                v.for_each_footprint<Flips>(slot, [&](i32 x) { hd::atomic_store(reservation + x, kNoReservation); });
+                if (st & kTaken) v.claim_around<Flips>(slot.e);
+            }, Grain::kWindow);
+            // The waiting go on to the next step; their order in the window
+            // does not matter, each knows its rank.
+            exec.compact(window, size, capacity, [=] TETISO_HD(i64 wi) { return state[wi] == kReserved; }, waiting,
+                         waiting_size);
+            current = 1 - current;
+        }
+        held = exec.get(sel.held, current);
     }
 }
 
