@@ -7,7 +7,8 @@
 #                                     sm_90 in build-gpu/ and gather the GPU
 #                                     test programs, bench_reduce_gpu, tetiso
 #                                     and the shared libraries the device
-#                                     lacks into .carry/gpu/ (carry it)
+#                                     lacks into .carry/gpu.tar.xz (carry
+#                                     .carry)
 #   scripts/gpu_check.sh run OUT [quick]
 #                                     there: every gpu-labelled test (the CPU
 #                                     reduction suite run on the GPU too, the
@@ -33,12 +34,20 @@ prepare() {
     for p in "${programs[@]}"; do ldd "$carry/bin/$p"; done | awk '{print $3}' | sort -u |
         grep -E 'libmuparser|libmetis|libmeshoptimizer|libbenchmark|libmpi_cxx|libGKlib' |
         while read -r lib; do cp -L "$lib" "$carry/lib/"; done
-    du -sh "$carry"
+    # What travels to the device is limited in size: stripped and packed.
+    strip "$carry"/bin/*
+    tar -C "$carry" -cJf "$root/.carry/gpu.tar.xz" bin lib
+    rm -rf "$carry"
+    du -sh "$root/.carry/gpu.tar.xz"
 }
 
 run() {
     local out=$1 quick=${2:-}
     mkdir -p "$out"
+    if [ ! -d "$carry/bin" ]; then
+        mkdir -p "$carry"
+        tar -C "$carry" -xJf "$root/.carry/gpu.tar.xz"
+    fi
     export LD_LIBRARY_PATH=$carry/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
     export OMP_WAIT_POLICY=passive
     local bin=$carry/bin failed=0

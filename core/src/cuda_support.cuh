@@ -89,6 +89,15 @@ __global__ void for_each_kernel(std::int64_t n, Function function) {
         function(i);
 }
 
+// The same over [0, max(*n, min_n)), n read on the device.
+template <class Function>
+__global__ void for_each_of_kernel(const std::int64_t* n, std::int64_t min_n, Function function) {
+    const std::int64_t count = *n > min_n ? *n : min_n;
+    for (std::int64_t i = blockIdx.x * static_cast<std::int64_t>(blockDim.x) + threadIdx.x; i < count;
+         i += static_cast<std::int64_t>(gridDim.x) * blockDim.x)
+        function(i);
+}
+
 template <class Function>
 void for_each(cudaStream_t stream, std::int64_t n, const Function& function, const char* what = "for_each") {
     if (n <= 0) return;

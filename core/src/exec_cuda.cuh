@@ -100,6 +100,11 @@ public:
     using Array = cuda::DeviceArray<T>;
 
     explicit CudaExec(cudaStream_t stream) : stream_(stream) {
+        int device = 0, processors = 0;
+        cuda::check(cudaGetDevice(&device), "cudaGetDevice");
+        cuda::check(cudaDeviceGetAttribute(&processors, cudaDevAttrMultiProcessorCount, device), "cudaDeviceGetAttribute");
+        // 2048 threads a multiprocessor: 8 blocks of kBlock.
+        resident_blocks_ = static_cast<unsigned>(std::max(1, processors)) * (2048 / cuda::kBlock);
         cuda::check(cudaMallocHost(reinterpret_cast<void**>(&pinned_), sizeof(i64) * kScalars), "cudaMallocHost");
         scalars_.resize(kScalars);
     }
@@ -138,31 +143,20 @@ public:
         cuda::for_each(stream_, n, function);
     }
 
-    // function(i) for i < *n, n in device memory (at most max_n): a loop
-    // whose size the device set, launched without the host reading it.
+    // function(i) for i < max(*n, min_n), n in device memory and at most
+    // max_n: a loop whose size the device set, launched without the host
+    // reading it. The grid is what the device holds at once, at most, each
+    // thread striding over the indices: a loop of a few elements costs a
+    // small launch whatever max_n is.
     template <class Function>
-    void for_each_of(const i64* n, i64 max_n, const Function& function, Grain = Grain::kCheap,
+    void for_each_of(const i64* n, i64 max_n, const Function& function, Grain = Grain::kCheap, i64 min_n = 0,
                      const char* file = __builtin_FILE(), int line = __builtin_LINE()) const {
         const Timed timed(*this, "for_each_of", file, line);
-        if (max_n <= 0) return;
-        cuda::for_each(stream_, max_n, [=] __device__(i64 i) {
-            if (i < *n) function(i);
-        });
-    }
-
-    // out = the elements in[i], i < *n_in, with keep(i), in no particular
-    // order (each slot knows its own rank: the loops that read them do not
-    // care); *n_out = their number. Sizes in device memory.
-    template <class T, class Keep>
-    void compact(const T* in, const i64* n_in, i64 max_n, const Keep& keep, T* out, i64* n_out,
-                 const char* file = __builtin_FILE(), int line = __builtin_LINE()) const {
-        const Timed timed(*this, "compact", file, line);
-        cuda::check(cudaMemsetAsync(n_out, 0, sizeof(i64), stream_), "cudaMemsetAsync");
-        if (max_n <= 0) return;
-        auto* count = reinterpret_cast<unsigned long long*>(n_out);
-        cuda::for_each(stream_, max_n, [=] __device__(i64 i) {
-            if (i < *n_in && keep(i)) out[atomicAdd(count, 1ull)] = in[i];
-        });
+        const i64 most = std::max(max_n, min_n);
+        if (most <= 0) return;
+        const unsigned blocks = std::min<unsigned>(cuda::blocks_for(most), resident_blocks_);
+        cuda::for_each_of_kernel<<<blocks, cuda::kBlock, 0, stream_>>>(n, min_n, function);
+        cuda::check_launch("for_each_of");
     }
 
     // Steps of a device-side loop between two reads of its state by the host:
@@ -399,6 +393,7 @@ private:
     }
 
     cudaStream_t stream_;
+    unsigned resident_blocks_ = 1;
     mutable cuda_exec::Profile profile_;
     i64* pinned_ = nullptr;
     Array<i64> scalars_;

@@ -57,30 +57,12 @@ struct HostExec {
         parallel::for_each(threads, n, grain, function);
     }
 
-    // function(i) for i < *n: a size the backend keeps where its loops run
-    // (here, host memory), at most max_n.
+    // function(i) for i < max(*n, min_n): a size the backend keeps where its
+    // loops run (here, host memory), at most max(max_n, min_n).
     template <class Function>
-    void for_each_of(const i64* n, i64 /*max_n*/, const Function& function, Grain grain = Grain::kCheap) const {
-        parallel::for_each(threads, *n, grain, function);
-    }
-
-    // out = the elements in[i], i < *n_in, with keep(i), in order; *n_out =
-    // their number (a size kept as for_each_of's).
-    template <class T, class Keep>
-    void compact(const T* in, const i64* n_in, i64 /*max_n*/, const Keep& keep, T* out, i64* n_out) const {
-        const i64 n = *n_in;
-        if (!parallel::Blocks(threads, n).parallel()) {
-            i64 kept = 0;
-            for (i64 i = 0; i < n; ++i)
-                if (keep(i)) out[kept++] = in[i];
-            *n_out = kept;
-            return;
-        }
-        std::vector<i32> at(static_cast<std::size_t>(n));
-        *n_out = parallel::rank(threads, n, keep, at.data());
-        parallel::for_each(threads, n, [&](i64 i) {
-            if (at[static_cast<std::size_t>(i)] >= 0) out[at[static_cast<std::size_t>(i)]] = in[i];
-        });
+    void for_each_of(const i64* n, i64 /*max_n*/, const Function& function, Grain grain = Grain::kCheap,
+                     i64 min_n = 0) const {
+        parallel::for_each(threads, std::max(*n, min_n), grain, function);
     }
 
     // Steps of a device-side loop run between two reads of its state by the

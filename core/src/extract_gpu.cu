@@ -459,8 +459,8 @@ Gpu::State::State(int device_index) : device(device_index) {
     // them about half a millisecond, whatever its size; keep it grown. Too
     // late where this process already uses the device (another Gpu of it):
     // then the stack limit alone, set below, spares the resizing.
-    cudaInitDevice(device_index, cudaDeviceLmemResizeToMax, 0);
-    cudaGetLastError();
+    if (cudaInitDevice(device_index, cudaDeviceLmemResizeToMax, cudaInitDeviceFlagsAreValid) != cudaSuccess)
+        cudaGetLastError();
     use_device();
     check_cuda(cudaDeviceSetLimit(cudaLimitStackSize, kStackBytes), "setting the GPU threads' stack size");
     check_cuda(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking), "cudaStreamCreate");

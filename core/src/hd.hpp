@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 
 #ifdef __CUDACC__
 #define TETISO_HD __host__ __device__
@@ -37,6 +38,39 @@ TETISO_HD inline void atomic_min(std::int32_t* at, std::int32_t value) {
 #endif
 }
 
+TETISO_HD inline void atomic_min(std::uint64_t* at, std::uint64_t value) {
+#ifdef __CUDA_ARCH__
+    atomicMin(reinterpret_cast<unsigned long long*>(at), static_cast<unsigned long long>(value));
+#else
+    std::uint64_t seen = __atomic_load_n(at, __ATOMIC_RELAXED);
+    while (value < seen && !__atomic_compare_exchange_n(at, &seen, value, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+    }
+#endif
+}
+
+TETISO_HD inline void atomic_max(std::uint64_t* at, std::uint64_t value) {
+#ifdef __CUDA_ARCH__
+    atomicMax(reinterpret_cast<unsigned long long*>(at), static_cast<unsigned long long>(value));
+#else
+    std::uint64_t seen = __atomic_load_n(at, __ATOMIC_RELAXED);
+    while (value > seen && !__atomic_compare_exchange_n(at, &seen, value, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+    }
+#endif
+}
+
+// A double's bits, and back (memcpy: the one conversion both compilers
+// accept in C++17 on host and device).
+TETISO_HD inline std::uint64_t bits(double x) {
+    std::uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    return b;
+}
+TETISO_HD inline double from_bits(std::uint64_t b) {
+    double x;
+    std::memcpy(&x, &b, sizeof x);
+    return x;
+}
+
 template <class T>
 TETISO_HD inline void atomic_store(T* at, T value) {
 #ifdef __CUDA_ARCH__
@@ -51,6 +85,15 @@ TETISO_HD inline void atomic_store(T* at, T value) {
 TETISO_HD inline std::int32_t atomic_add(std::int32_t* at, std::int32_t value) {
 #ifdef __CUDA_ARCH__
     return atomicAdd(at, value);
+#else
+    return __atomic_fetch_add(at, value, __ATOMIC_RELAXED);
+#endif
+}
+
+TETISO_HD inline std::int64_t atomic_add(std::int64_t* at, std::int64_t value) {
+#ifdef __CUDA_ARCH__
+    return static_cast<std::int64_t>(
+        atomicAdd(reinterpret_cast<unsigned long long*>(at), static_cast<unsigned long long>(value)));
 #else
     return __atomic_fetch_add(at, value, __ATOMIC_RELAXED);
 #endif

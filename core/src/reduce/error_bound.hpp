@@ -255,6 +255,67 @@ TETISO_HD bool place_samples(const RoundView& m, const EdgeSlots& r, const NewFa
     return placed;
 }
 
+// How many samples the faces of both leaves of a collapse hold.
+TETISO_HD inline i32 leaf_sample_count(const RoundView& m, const EdgeSlots& r) {
+    i32 count = 0;
+    for_each_leaf_face(r, [&](i32 slot, bool) {
+        const FaceGeometry& g = m.geo[m.face(slot)];
+        count += g.samples_end - g.samples_begin;
+    });
+    return count;
+}
+
+// One sample placed as place_samples places it: the triangle it goes to
+// (-1 when no new face is within max_error of it) and its bound.
+struct LeafSamplePlacement {
+    i32 sample, triangle;
+    double bound;
+};
+
+// Sample j of the leaves of a collapse to p, counted in place_samples'
+// order, placed by itself: the same distances, compared in the same order,
+// as place_samples computes for it, so that placing the samples of one
+// collapse on as many threads gives place_samples' placements and, as the
+// largest of the bounds, its worst.
+TETISO_HD inline LeafSamplePlacement place_leaf_sample(const RoundView& m, const EdgeSlots& r, Vec p, i32 j) {
+    i32 sample = -1, own_slot = -1;
+    for_each_leaf_face(r, [&](i32 slot, bool removed) {
+        if (sample >= 0) return;
+        const FaceGeometry& g = m.geo[m.face(slot)];
+        const i32 count = g.samples_end - g.samples_begin;
+        if (j < count) {
+            sample = g.samples_begin + j;
+            own_slot = removed ? -1 : slot;
+        } else {
+            j -= count;
+        }
+    });
+    const double base = m.samples.point[sample].base;
+    const auto corners = [&](i32 slot, Vec& a, Vec& b) {
+        a = m.s.pos(m.fans.next[slot]);
+        b = m.s.pos(m.fans.prev[slot]);
+    };
+    Vec a, b;
+    if (own_slot >= 0) {
+        corners(own_slot, a, b);
+        const double d = sample_distance(m.samples, sample, p, a, b);
+        if (base + d <= m.p.max_error) return {sample, m.face(own_slot), base + d};
+    }
+    double d = std::numeric_limits<double>::infinity();
+    i32 at = -1;
+    for_each_leaf_face(r, [&](i32 slot, bool removed) {
+        if (removed) return;
+        corners(slot, a, b);
+        const double df = sample_distance(m.samples, sample, p, a, b);
+        if (df < d) {
+            d = df;
+            at = m.face(slot);
+        }
+    });
+    if (!(base + d <= m.p.max_error)) return {sample, -1, 0.0};
+    return {sample, at, base + d};
+}
+
 // The same for a flip: f1 = (u, w, c), f2 = (w, u, d) become (c, u, d) in
 // f1's place and (d, w, c) in f2's; each sample of either goes to the nearer
 // of the two.

@@ -350,10 +350,13 @@ struct Placements {
 };
 
 // owns(border_edge): whether the corners the collapse would own are its to
-// take, asked last, of a collapse that passed every other test.
+// take, asked last, of a collapse that passed every other test. deferred:
+// where the samples are placed later, one by one (place_leaf_sample), this
+// takes the bound they start from and the test places none (nor writes the
+// new faces' bound); null to place them here.
 template <class Owns>
 TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsView& ops, i32 i, i32* owner,
-                              const Owns& owns) {
+                              const Owns& owns, double* deferred = nullptr) {
     const i32 u = r.u, w = r.w, c = r.c, d = r.d;
     const bool border_edge = r.f1 < 0 || r.f2 < 0;
     // Link condition.
@@ -469,6 +472,11 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
     // replaces (the samples see only the 2D one).
     double worst = border_edge ? err_old + increment : 0.0;
     if (worst > m.p.max_error) return false;
+    if (deferred) {
+        if (!clear_of_neighbours(m, u, w, border_edge, fan) || !owns(border_edge)) return false;
+        *deferred = worst;
+        return true;
+    }
     // The placements wait until every sample has found a face: a test that
     // fails half way must leave the owners as they were.
     Placements placed;
@@ -494,8 +502,10 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
 // corners the collapse would own are its to take (n = -1: too many); asked
 // only of a legal collapse, which is blocked when they are not, its samples
 // left where they were.
+// deferred: see legal_collapse.
 template <class FreeCorners>
-TETISO_HD Verdict legal(const RoundView& m, i32 e, const OpsView& ops, i32* owner, const FreeCorners& free_corners) {
+TETISO_HD Verdict legal(const RoundView& m, i32 e, const OpsView& ops, i32* owner, const FreeCorners& free_corners,
+                        double* deferred = nullptr) {
     if (ops.kind[e] == kFlip) return Verdict::kLegal;
     const EdgeSlots r = slots(m, e);
     if (ops.kind[e] == kPending && !place_collapse(m, r, ops, e)) return Verdict::kIllegal;
@@ -505,7 +515,7 @@ TETISO_HD Verdict legal(const RoundView& m, i32 e, const OpsView& ops, i32* owne
             const int n = owned_corners(m.fans, m.cones, r.u, r.w, border_edge, owned);
             blocked = !free_corners(owned, n);
             return !blocked;
-        }))
+        }, deferred))
         return Verdict::kLegal;
     return blocked ? Verdict::kBlocked : Verdict::kIllegal;
 }

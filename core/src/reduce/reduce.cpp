@@ -88,7 +88,7 @@ void check_reduce_options(const ReduceOptions& o) {
 namespace {
 
 Piece reduce_on_host(const Piece& in, const ReduceOptions& options, ReduceReport* report, bool reservations,
-                     long window) {
+                     long window, bool speculate) {
     const auto start = std::chrono::steady_clock::now();
     check_reduce_options(options);
     check_reduce_input(in);
@@ -104,6 +104,7 @@ Piece reduce_on_host(const Piece& in, const ReduceOptions& options, ReduceReport
     reduction::ReductionState<HostExec> state;
     state.selection.always_reservations = reservations;
     state.selection.window_override = window;
+    state.selection.speculate = speculate;
     reduction::load_piece(exec, in, options.max_error > 0, state);
     reduction::run_rounds(exec, state, options, available, rep);
     Piece out = reduction::unload_piece(exec, state, options.keep_samples);
@@ -117,12 +118,13 @@ Piece reduce_on_host(const Piece& in, const ReduceOptions& options, ReduceReport
 } // namespace
 
 Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report) {
-    return reduce_on_host(in, options, report, false, 0);
+    return reduce_on_host(in, options, report, false, 0, false);
 }
 
 namespace detail {
-Piece reduce_by_reservations(const Piece& in, const ReduceOptions& options, long window, ReduceReport* report) {
-    return reduce_on_host(in, options, report, true, window);
+Piece reduce_by_reservations(const Piece& in, const ReduceOptions& options, long window, bool speculate,
+                             ReduceReport* report) {
+    return reduce_on_host(in, options, report, true, window, speculate);
 }
 } // namespace detail
 

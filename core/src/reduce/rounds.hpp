@@ -61,6 +61,10 @@ struct ReductionState {
     Array<u32> priority;
     Array<float> px, py, pz, err;
     Array<i32> survivor;
+    // Where the selection's dry runs write their proposals (speculation).
+    Array<u8> dry_kind;
+    Array<float> dry_px, dry_py, dry_pz, dry_err;
+    Array<i32> dry_survivor;
     Array<u8> chosen, refused, changed;
     Array<u32> refused_slots;
     Array<i32> candidates, flips, offered, to_move, scratch, rank, list, first, order;
@@ -71,6 +75,10 @@ struct ReductionState {
 
     OpsView ops() {
         return {kind.data(), priority.data(), px.data(), py.data(), pz.data(), err.data(), survivor.data()};
+    }
+    OpsView dry_ops() {
+        return {dry_kind.data(), priority.data(), dry_px.data(), dry_py.data(), dry_pz.data(), dry_err.data(),
+                dry_survivor.data()};
     }
 };
 
@@ -169,6 +177,11 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         st.kind.resize(edge_count);
         st.priority.resize(edge_count);
         st.survivor.resize(edge_count);
+        if (st.selection.speculate) {
+            for (auto* a : {&st.dry_px, &st.dry_py, &st.dry_pz, &st.dry_err}) a->resize(edge_count);
+            st.dry_kind.resize(edge_count);
+            st.dry_survivor.resize(edge_count);
+        }
         exec.assign(st.refused, ne, u8{0});
         if (st.samples.on) st.samples.sort(exec, st.geometry, s.nt);
         build_cones(exec, s.view(), fans, st.geometry.data(), st.cones);
@@ -208,7 +221,7 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         const SelectView select_view{fans, edges, st.cones.data(), sel.claimed.data(), 0};
         i32* owner = st.samples.on ? st.samples.owner.data() : nullptr;
         choose<false>(exec, sel, select_view, st.candidates, candidates, s.nv, st.priority.data(), chosen, refused,
-                      CollapseTest{m, ops, owner});
+                      CollapseTest{m, ops, owner, st.dry_ops()});
         // Flips: for the interior edges with no collapse that no chosen
         // collapse blocks. refused[e] (set by the selection for a collapse
         // found impossible or illegal) ends as "no operation is possible on

@@ -40,7 +40,12 @@ constexpr u8 kChosen = 1;
 constexpr i64 kReservationWindowMin = 512;
 constexpr i64 kReservationSteps = 32;
 constexpr i64 kReservationMin = 256;
-constexpr i32 kNoReservation = std::numeric_limits<i32>::max();
+constexpr u64 kNoReservation = std::numeric_limits<u64>::max();
+constexpr i32 kNoClaim = std::numeric_limits<i32>::max();
+
+// What became of an operation under speculation (choose_by_reservations),
+// by rank.
+constexpr u8 kOutcomeUndecided = 0, kOutcomeIllegal = 1, kOutcomeChosen = 2, kOutcomeBlockedByCorner = 3;
 
 // An operation in the reservations' window: its rank in the round's order,
 // the edge and its ends (read once, when it enters).
@@ -91,16 +96,21 @@ struct SelectView {
         return true;
     }
     // Claims the closed 1-ring of every vertex chosen operation e touches and
-    // of every corner it owns.
+    // of every corner it owns; with claim_rank, also records there the
+    // lowest rank that claimed each vertex.
     template <bool Flips>
-    TETISO_HD void claim_around(i32 e) const {
+    TETISO_HD void claim_around(i32 e, i32* claim_rank = nullptr, i32 rank = 0) const {
         i32 vs[4 + kMaxOwned];
         int n = touched<Flips>(e, edges.v0[e], edges.v1[e], vs);
         const int owned_n = owned<Flips>(e, vs + n);
         n += owned_n > 0 ? owned_n : 0;
+        const auto mark = [&](i32 x) {
+            claim(x);
+            if (claim_rank) hd::atomic_min(claim_rank + x, rank);
+        };
         for (int i = 0; i < n; ++i) {
-            claim(vs[i]);
-            for (i32 j = 0, m = fans.nn(vs[i]); j < m; ++j) claim(fans.nbr(vs[i], j));
+            mark(vs[i]);
+            for (i32 j = 0, m = fans.nn(vs[i]); j < m; ++j) mark(fans.nbr(vs[i], j));
         }
     }
     // A window operation's touched vertices, then its owned corners.
@@ -123,9 +133,39 @@ struct CollapseTest {
     RoundView m;
     OpsView ops;
     i32* owner; // the samples' owners; null without samples
+    // Scratch arrays beside ops (the priorities are the round's, read only):
+    // where a dry run writes its proposal.
+    OpsView dry;
     template <class FreeCorners>
     TETISO_HD Verdict operator()(i32 e, const FreeCorners& free_corners) const {
         return legal(m, e, ops, owner, free_corners);
+    }
+    // The verdict of the tests on the round's state, its corners taken as
+    // free, with nothing written that the round reads and the samples left
+    // for place() (their starting bound in *deferred).
+    TETISO_HD Verdict dry_run(i32 e, double* deferred) const {
+        dry.kind[e] = ops.kind[e];
+        dry.px[e] = ops.px[e];
+        dry.py[e] = ops.py[e];
+        dry.pz[e] = ops.pz[e];
+        dry.survivor[e] = ops.survivor[e];
+        return legal(m, e, dry, nullptr, [](const i32*, int) { return true; }, deferred);
+    }
+    TETISO_HD bool samples_on() const { return m.samples.on; }
+    TETISO_HD i32 leaf_samples(i32 e) const { return leaf_sample_count(m, slots(m, e)); }
+    // Sample j of the leaves of dry-run collapse e.
+    TETISO_HD LeafSamplePlacement place(i32 e, i32 j) const {
+        return place_leaf_sample(m, slots(m, e), {dry.px[e], dry.py[e], dry.pz[e]}, j);
+    }
+    // What the real test of e would have written of its proposal: the dry
+    // run's, with the new faces' bound where it chose e.
+    TETISO_HD void adopt(i32 e, bool chosen) const {
+        ops.kind[e] = dry.kind[e];
+        ops.px[e] = dry.px[e];
+        ops.py[e] = dry.py[e];
+        ops.pz[e] = dry.pz[e];
+        ops.survivor[e] = dry.survivor[e];
+        if (chosen) ops.err[e] = dry.err[e];
     }
 };
 struct FlipTest {
@@ -139,14 +179,25 @@ template <class Exec>
 struct Selection {
     template <class T>
     using Array = typename Exec::template Array<T>;
-    Array<i32> claimed, order, reservation;
+    Array<i32> claimed, order;
+    Array<u64> reservation;
     Array<i32> ends; // the sweep's operations' ends, in its order
     Array<WindowSlot> window, waiting;
     Array<u8> state;
     Array<i64> held; // the sizes of window and waiting (choose_by_reservations)
+    // Speculation: each rank's outcome, the ranks of a list, and per vertex
+    // the lowest rank of a chosen operation that claimed it.
+    Array<u8> outcome;
+    Array<i32> entrants, claim_rank;
+    // The samples of the dry runs' leaves, one item each: per rank its
+    // first item and bound, per item the sample and where it goes.
+    Array<i32> sample_count, sample_first, item_sample, item_triangle;
+    Array<u64> worst_bits;
+    i32 items = 0;
+    bool speculate = !Exec::kHost;
     i32 stamp = 0;
     // Tests only: the reservations on one host thread too, with this window
-    // (0: the backend's).
+    // (0: the backend's), and speculate as chosen.
     bool always_reservations = false;
     i64 window_override = 0;
     std::size_t steps = 0; // reservation steps since the counter was reset
@@ -186,6 +237,67 @@ void choose_in_order(Selection<Exec>& sel, const SelectView& v, i32 n, u8* chose
     }
 }
 
+// The rank whose items (sample_first, an exclusive scan of n + 1 entries)
+// hold item.
+TETISO_HD inline i32 rank_of_item(const i32* first, i32 n, i32 item) {
+    i32 low = 0, high = n; // first[low] <= item < first[high]
+    while (high - low > 1) {
+        const i32 mid = low + (high - low) / 2;
+        if (first[mid] <= item) low = mid;
+        else high = mid;
+    }
+    return low;
+}
+
+// Speculation's dry runs: every collapse of the round tested on its state,
+// its samples placed one a thread (the tests of a collapse are a few hundred
+// steps, its samples' placement as many again for each sample, which late
+// rounds have dozens of a face: on the GPU one thread placing them all
+// would be the round's slowest). outcome[rank]: kOutcomeUndecided where
+// legal, else kOutcomeIllegal; the dry proposal's bound in dry.err.
+template <class Exec, class Test>
+void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
+    using Grain = typename Exec::Grain;
+    const i32* order = sel.order.data();
+    sel.outcome.resize(static_cast<std::size_t>(n));
+    u8* outcome = sel.outcome.data();
+    const bool samples = test.samples_on();
+    if (samples) {
+        sel.worst_bits.resize(static_cast<std::size_t>(n));
+        sel.sample_count.resize(static_cast<std::size_t>(n));
+    }
+    u64* worst = sel.worst_bits.data();
+    i32* count = sel.sample_count.data();
+    exec.for_each(n, [=] TETISO_HD(i64 k) {
+        const i32 e = order[k];
+        double deferred = 0.0;
+        const bool legal = test.dry_run(e, samples ? &deferred : nullptr) == Verdict::kLegal;
+        outcome[k] = legal ? kOutcomeUndecided : kOutcomeIllegal;
+        if (!samples) return;
+        worst[k] = hd::bits(deferred);
+        count[k] = legal ? test.leaf_samples(e) : 0;
+    }, Grain::kTests);
+    sel.items = 0;
+    if (!samples) return;
+    sel.items = exec.exclusive_scan(sel.sample_count, n, sel.sample_first);
+    sel.item_sample.resize(static_cast<std::size_t>(sel.items));
+    sel.item_triangle.resize(static_cast<std::size_t>(sel.items));
+    const i32* first = sel.sample_first.data();
+    i32 *item_sample = sel.item_sample.data(), *item_triangle = sel.item_triangle.data();
+    exec.for_each(sel.items, [=] TETISO_HD(i64 item) {
+        const i32 k = rank_of_item(first, n, static_cast<i32>(item));
+        const LeafSamplePlacement placed = test.place(order[k], static_cast<i32>(item) - first[k]);
+        item_sample[item] = placed.sample;
+        item_triangle[item] = placed.triangle;
+        // Bounds are not negative: their bits order as they do.
+        if (placed.triangle < 0) hd::atomic_store(outcome + k, kOutcomeIllegal);
+        else hd::atomic_max(worst + k, hd::bits(placed.bound));
+    });
+    exec.for_each(n, [=] TETISO_HD(i64 k) {
+        if (outcome[k] == kOutcomeUndecided) test.dry.err[order[k]] = static_cast<float>(hd::from_bits(worst[k]));
+    });
+}
+
 // The same sequential greedy choice by deterministic reservations:
 // operations enter a window in priority order; in each step every window
 // operation not yet blocked by a chosen one reserves its footprint with its
@@ -193,21 +305,53 @@ void choose_in_order(Selection<Exec>& sel, const SelectView& v, i32 n, u8* chose
 // within path length 1 of its footprint has no undecided earlier operation in
 // conflict with it. Its turn in the sequential order has come: it is tested,
 // and chosen if legal, exactly as the sweep would; those decided in one step
-// are pairwise clear of each other. The others wait for the next step, ahead
-// of the operations entering behind them. Each operation is tested at most
-// once, the tests run in parallel, and the set is the sweep's for any thread
-// count, window width and backend. On the 16-core device this chose
-// 1.16-1.25x faster than the passes it replaced (local maxima of the
-// priority, with a bulk test of what was left after 16 passes) at 4 and 8
-// threads on the N = 100 paper surface.
+// are pairwise clear of each other. The others wait for the next step. Each
+// operation is tested at most once, the tests run in parallel, and the set
+// is the sweep's for any thread count, window width and backend.
+//
+// A reservation is stamped with its step (the step in the high word, counted
+// down, so that a reservation of this step is below every older one): the
+// reservations never need clearing, and a step is two parallel loops, one to
+// reserve and one to decide and claim, with no pass of the host between
+// them.
+//
+// Speculation (sel.speculate, the device's choice): every operation is
+// tested first, all at once, on the round's state and writing nothing the
+// round reads (test.dry_run). An operation found illegal then never enters
+// the window: it could block no one, so no one waits for it, and the chains
+// of waiting, which the steps follow one link a step, are those of the legal
+// operations alone (late rounds, where most candidates are illegal, took
+// three to four times fewer steps). What the sweep does with each operation
+// is then settled after the steps, from the ranks that claimed each vertex:
+// an illegal one whose ends no earlier choice claimed is refused (and its Φ
+// written, as the sweep's test writes it), and the chosen ones are tested
+// for real last, moving their samples; an operation that the sweep tests
+// finds its leaves as the round left them, since a chosen operation whose
+// leaves share a face with it would have blocked it, so the verdict is the
+// dry run's.
 template <bool Flips, class Exec, class Test>
 void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& v, i32 n, i32 nv, u8* chosen,
                             u8* refused, const Test& test) {
     using Grain = typename Exec::Grain;
+    const bool speculate = sel.speculate && !Flips;
     exec.assign(sel.reservation, nv, kNoReservation);
-    i32* reservation = sel.reservation.data();
-    const i64 width = sel.window_override > 0 ? sel.window_override : exec.reservation_window(n);
-    const i64 capacity = std::min<i64>(width, n);
+    u64* reservation = sel.reservation.data();
+    const i32* order = sel.order.data();
+    // The ranks that take part, ascending: all, or the legal ones.
+    i64 entrants = n;
+    const i32* entrant_rank = nullptr;
+    u8* outcome = nullptr;
+    i32* claim_rank = nullptr;
+    if (speculate) {
+        if constexpr (!Flips) dry_run_all(exec, sel, n, test);
+        outcome = sel.outcome.data();
+        entrants = exec.filter(n, [=] TETISO_HD(i64 k) { return outcome[k] == kOutcomeUndecided; }, sel.entrants);
+        entrant_rank = sel.entrants.data();
+        exec.assign(sel.claim_rank, nv, kNoClaim);
+        claim_rank = sel.claim_rank.data();
+    }
+    const i64 width = sel.window_override > 0 ? sel.window_override : exec.reservation_window(entrants);
+    const i64 capacity = std::max<i64>(1, std::min<i64>(width, entrants));
     sel.window.resize(static_cast<std::size_t>(capacity));
     sel.waiting.resize(static_cast<std::size_t>(capacity));
     sel.state.resize(static_cast<std::size_t>(capacity));
@@ -218,18 +362,18 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
     // kTestOnly: blocked by a corner it would own, claimed by an earlier
     // choice (or owning too many); tested only to tell refused from blocked,
     // as the sweep does.
-    constexpr u8 kReserved = 1, kDecided = 2, kTaken = 4, kTestOnly = 8;
+    constexpr u8 kReserved = 1, kTestOnly = 2;
     i64 next = 0, held = 0; // held: the window's size, as the host last read it
     int current = 0;        // which of held[0], held[1] is the window's
-    while (next < n || held > 0) {
-        if (next < n && held < width) {
-            const i64 entering = std::min<i64>(width - held, n - next);
-            WindowSlot* window = current == 0 ? sel.window.data() : sel.waiting.data();
-            WindowSlot* at = window + held;
-            const i32* order = sel.order.data() + next;
-            const i32 first_rank = static_cast<i32>(next);
+    u32 step = 0;
+    while (next < entrants || held > 0) {
+        if (next < entrants && held < width) {
+            const i64 entering = std::min<i64>(width - held, entrants - next);
+            WindowSlot* at = (current == 0 ? sel.window.data() : sel.waiting.data()) + held;
+            const i32 first = static_cast<i32>(next);
             exec.for_each(entering, [=] TETISO_HD(i64 k) {
-                at[k] = {first_rank + static_cast<i32>(k), order[k], -1, -1, -1};
+                const i32 rank = entrant_rank ? entrant_rank[first + k] : first + static_cast<i32>(k);
+                at[k] = {rank, order[rank], -1, -1, -1};
             });
             next += entering;
             held += entering;
@@ -238,15 +382,21 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
         // While operations still wait to enter, the host must know the
         // window's size after each step; once all are in, the backend may run
         // several steps before it looks.
-        const int steps = next < n ? 1 : exec.steps_between_checks();
-        for (int step = 0; step < steps; ++step) {
+        const int steps = next < entrants ? 1 : exec.steps_between_checks();
+        for (int s = 0; s < steps; ++s) {
             ++sel.steps;
+            ++step;
+            const u64 stamp = static_cast<u64>(~step) << 32;
             WindowSlot* window = current == 0 ? sel.window.data() : sel.waiting.data();
             WindowSlot* waiting = current == 0 ? sel.waiting.data() : sel.window.data();
             i64* size = sel.held.data() + current;
             i64* waiting_size = sel.held.data() + (1 - current);
             u8* state = sel.state.data();
+            // Index 0 runs even in an empty window: it empties the waiting
+            // list, last read (as the window) by the previous step's loops.
             exec.for_each_of(size, capacity, [=] TETISO_HD(i64 wi) {
+                if (wi == 0) *waiting_size = 0;
+                if (wi >= *size) return;
                 WindowSlot& slot = window[wi];
                 state[wi] = 0;
                 if (slot.u < 0) {
@@ -262,25 +412,41 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
                     return;
                 }
                 state[wi] = kReserved;
-                v.for_each_footprint<Flips>(slot, [&](i32 x) { hd::atomic_min(reservation + x, slot.rank); });
-            }, Grain::kWindow);
+                const u64 key = stamp | static_cast<u32>(slot.rank);
+                v.for_each_footprint<Flips>(slot, [&](i32 x) { hd::atomic_min(reservation + x, key); });
+            }, Grain::kWindow, 1);
             exec.for_each_of(size, capacity, [=] TETISO_HD(i64 wi) {
-                u8& st = state[wi];
+                const u8 st = state[wi];
                 if (!st) return;
                 const WindowSlot& slot = window[wi];
                 const bool test_only = st == kTestOnly;
                 if (!test_only) {
-                    // Its own vertices first: a shared end is the commonest conflict.
+                    // An earlier rank reserved this step is below the key; an
+                    // older step's reservation is above it. Its own vertices
+                    // first: a shared end is the commonest conflict.
+                    const u64 key = stamp | static_cast<u32>(slot.rank);
                     bool first = true;
-                    v.for_each_footprint<Flips>(slot, [&](i32 x) { first = first && reservation[x] == slot.rank; });
-                    if (!first) return;
+                    v.for_each_footprint<Flips>(slot, [&](i32 x) { first = first && reservation[x] == key; });
                     bool nearby = false; // an earlier operation nearby is undecided
-                    v.for_each_footprint<Flips>(slot, [&](i32 x) {
-                        for (i32 j = 0, m = v.fans.nn(x); j < m && !nearby; ++j)
-                            nearby = reservation[v.fans.nbr(x, j)] < slot.rank;
-                    });
-                    if (nearby) return;
-                    st |= kDecided;
+                    if (first)
+                        v.for_each_footprint<Flips>(slot, [&](i32 x) {
+                            for (i32 j = 0, m = v.fans.nn(x); j < m && !nearby; ++j)
+                                nearby = reservation[v.fans.nbr(x, j)] < key;
+                        });
+                    if (!first || nearby) {
+                        waiting[hd::atomic_add(waiting_size, i64{1})] = slot;
+                        return;
+                    }
+                }
+                if (speculate) { // tested after the steps
+                    if (test_only) {
+                        outcome[slot.rank] = kOutcomeBlockedByCorner;
+                        return;
+                    }
+                    outcome[slot.rank] = kOutcomeChosen;
+                    chosen[slot.e] = kChosen;
+                    v.claim_around<Flips>(slot.e, claim_rank, slot.rank);
+                    return;
                 }
                 // A decided operation's owned corners were clear when it
                 // reserved them, and only an earlier operation, all decided
@@ -297,22 +463,42 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
                     return;
                 }
                 chosen[slot.e] = kChosen;
-                st |= kTaken;
+                v.claim_around<Flips>(slot.e, nullptr, 0);
             }, Grain::kTests);
-            exec.for_each_of(size, capacity, [=] TETISO_HD(i64 wi) {
-                const u8 st = state[wi];
-                if (!st || st == kTestOnly) return;
-                const WindowSlot& slot = window[wi];
-                v.for_each_footprint<Flips>(slot, [&](i32 x) { hd::atomic_store(reservation + x, kNoReservation); });
-                if (st & kTaken) v.claim_around<Flips>(slot.e);
-            }, Grain::kWindow);
-            // The waiting go on to the next step; their order in the window
-            // does not matter, each knows its rank.
-            exec.compact(window, size, capacity, [=] TETISO_HD(i64 wi) { return state[wi] == kReserved; }, waiting,
-                         waiting_size);
             current = 1 - current;
         }
         held = exec.get(sel.held, current);
+    }
+    if constexpr (!Flips) {
+        if (!speculate) return;
+        // What the sweep's tests wrote, as the dry runs found it: the Φ and
+        // position of every operation it tested, a refusal for the illegal
+        // ones, the bound and the samples' new owners for the chosen ones.
+        exec.for_each(n, [=] TETISO_HD(i64 k) {
+            const i32 rank = static_cast<i32>(k);
+            const i32 e = order[rank];
+            const u8 what = outcome[rank];
+            if (what == kOutcomeIllegal) {
+                // The sweep skips it where an earlier choice claimed one of its ends.
+                i32 vs[4];
+                const int count = v.touched<Flips>(e, v.edges.v0[e], v.edges.v1[e], vs);
+                for (int j = 0; j < count; ++j)
+                    if (claim_rank[vs[j]] < rank) return;
+                refused[e] = 1;
+            } else if (what != kOutcomeChosen && what != kOutcomeBlockedByCorner) {
+                return; // blocked: never tested
+            }
+            test.adopt(e, what == kOutcomeChosen);
+        });
+        if (sel.items > 0 && test.samples_on()) {
+            const i32* first = sel.sample_first.data();
+            const i32 *item_sample = sel.item_sample.data(), *item_triangle = sel.item_triangle.data();
+            i32* owner = test.owner;
+            exec.for_each(sel.items, [=] TETISO_HD(i64 item) {
+                if (outcome[rank_of_item(first, n, static_cast<i32>(item))] == kOutcomeChosen)
+                    owner[item_sample[item]] = item_triangle[item];
+            });
+        }
     }
 }
 

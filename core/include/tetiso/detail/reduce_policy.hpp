@@ -1,8 +1,9 @@
 // For tests: the host reduction made to choose as the GPU does (by
 // deterministic reservations in every round, the flips too, on any thread
-// count), with a window of `window` operations (0: the host's). Its output
-// must be reduce()'s, byte for byte: the choice does not depend on how it is
-// made, and this checks that where there is no GPU.
+// count), with a window of `window` operations (0: the host's), and with
+// speculate, every collapse tested before the steps as the GPU does. Its
+// output must be reduce()'s, byte for byte: the choice does not depend on how
+// it is made, and this checks that where there is no GPU.
 #pragma once
 
 #include "tetiso/mesh.hpp"
@@ -10,7 +11,7 @@
 
 namespace tetiso::detail {
 
-Piece reduce_by_reservations(const Piece& in, const ReduceOptions& options, long window,
+Piece reduce_by_reservations(const Piece& in, const ReduceOptions& options, long window, bool speculate,
                              ReduceReport* report = nullptr);
 
 } // namespace tetiso::detail
