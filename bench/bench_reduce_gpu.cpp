@@ -14,6 +14,9 @@
 //                              as the job runs it on a GPU (wall time)
 //   domain/tetiso/N:<N>/D:<D>  the same task on one CPU core: field, domain,
 //                              extraction, reduction
+//   copy/gpu                   a device-to-device copy of 1 GiB: the memory
+//                              bandwidth the figures above are measured
+//                              against (bytes read plus bytes written)
 // Before timing, every GPU case checks that its piece is the CPU's, byte for
 // byte; a case that differs says so and fails (the program exits 1).
 //
@@ -40,6 +43,9 @@
 #include "tetiso/seam.hpp"
 #ifdef TETISO_HAVE_MESHOPTIMIZER
 #include "tetiso/reference.hpp"
+#endif
+#ifdef TETISO_HAVE_CUDA
+#include <cuda_runtime.h>
 #endif
 
 namespace {
@@ -199,6 +205,40 @@ void bench_domain(benchmark::State& state, DomainTask task, bool on_gpu) {
     }
 }
 
+#ifdef TETISO_HAVE_CUDA
+// Timed by the device's events around each copy.
+void bench_copy(benchmark::State& state) {
+    constexpr std::size_t kBytes = std::size_t{1} << 30;
+    void *from = nullptr, *to = nullptr;
+    cudaEvent_t start, stop;
+    if (cudaMalloc(&from, kBytes) != cudaSuccess || cudaMalloc(&to, kBytes) != cudaSuccess ||
+        cudaMemset(from, 1, kBytes) != cudaSuccess) {
+        state.SkipWithError("cannot allocate 2 GiB on the device");
+        cudaFree(from);
+        return;
+    }
+    cudaEventCreate(&start);
+    cudaEventCreate(&stop);
+    cudaMemcpy(to, from, kBytes, cudaMemcpyDeviceToDevice); // warm up
+    for (auto _ : state) {
+        cudaEventRecord(start);
+        cudaMemcpyAsync(to, from, kBytes, cudaMemcpyDeviceToDevice);
+        cudaEventRecord(stop);
+        cudaEventSynchronize(stop);
+        float ms = 0;
+        cudaEventElapsedTime(&ms, start, stop);
+        state.SetIterationTime(ms / 1e3);
+    }
+    state.counters["bytes_moved"] = 2.0 * kBytes;
+    state.counters["GB/s"] = benchmark::Counter(2.0 * kBytes * static_cast<double>(state.iterations()) / 1e9,
+                                                benchmark::Counter::kIsRate);
+    cudaEventDestroy(start);
+    cudaEventDestroy(stop);
+    cudaFree(from);
+    cudaFree(to);
+}
+#endif
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -239,6 +279,13 @@ int main(int argc, char** argv) {
     }
     const std::string domain = "/N:" + std::to_string(task.n) + "/D:" + std::to_string(task.domains);
     if (gpu()) register_timed("domain/gpu" + domain, bench_domain, task, true);
+#ifdef TETISO_HAVE_CUDA
+    if (gpu())
+        benchmark::RegisterBenchmark("copy/gpu", bench_copy)
+            ->UseManualTime()
+            ->ComputeStatistics("min", minimum)
+            ->Unit(benchmark::kMillisecond);
+#endif
     register_timed("domain/tetiso" + domain, bench_domain, task, false)->Repetitions(3);
     benchmark::RunSpecifiedBenchmarks();
     benchmark::Shutdown();

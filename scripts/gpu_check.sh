@@ -16,6 +16,10 @@
 #                                     command line with cmp), then
 #                                     bench_reduce_gpu; logs and the benchmark's
 #                                     JSON under OUT. quick: the tests only.
+#   scripts/gpu_check.sh bench OUT [COMMIT]
+#                                     there: the tests, then what
+#                                     results/reduce-gpu/ is made from (see
+#                                     bench() below), under OUT
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 carry=$root/.carry/gpu
@@ -80,11 +84,40 @@ run() {
     return $failed
 }
 
+# The measurements of results/reduce-gpu/, there: the whole benchmark (the
+# GPU, one and every CPU thread, meshoptimizer, the domain task, the device's
+# copy bandwidth), the N = 100 reduction's rounds and, apart, its time by
+# call site (TETISO_GPU_PROFILE waits for the device around every primitive,
+# so its seconds add up to more than the plain run's); then, here,
+# scripts/report_reduce_gpu.py OUT writes the report from OUT.
+bench() {
+    local out=$1 commit=${2:-unknown}
+    run "$out" quick || return 1
+    local bin=$carry/bin
+    local cmd=(bench_reduce_gpu --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+        --benchmark_out_format=json --benchmark_out="$out/bench_reduce_gpu.json")
+    local load_before
+    load_before=$(cut -d' ' -f1-3 /proc/loadavg)
+    timeout 500 "$bin/${cmd[0]}" "${cmd[@]:1}" >"$out/bench.log" 2>&1 || return 1
+    "$bin/tetiso" extract --lattice 100 --threads 0 -o /tmp/tetiso-p100.ply >/dev/null
+    local reduce=(tetiso reduce /tmp/tetiso-p100.ply -o /tmp/tetiso-r100.ply --device gpu --max-error 0.0126262626
+        --report "$out/rounds_n100.json")
+    "$bin/${reduce[0]}" "${reduce[@]:1}" >/dev/null
+    TETISO_GPU_PROFILE=1 "$bin/tetiso" "${reduce[@]:1:8}" --report /tmp/tetiso-profiled.json 2>"$out/profile_n100.txt" >/dev/null
+    python3 "$root/scripts/bench_report_common.py" meta "$out/meta.json" \
+        "bench_cmd=${cmd[*]}" "reduce_cmd=${reduce[*]}" "script_cmd=scripts/gpu_check.sh bench OUT $commit" \
+        "commit=$commit" "source_state=Release build for sm_90 of commit $commit, made by scripts/gpu_check.sh prepare" \
+        "gpu=$(nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader)" \
+        "environment=OMP_WAIT_POLICY=passive" "load_before=$load_before" "load_after=$(cut -d' ' -f1-3 /proc/loadavg)"
+    grep -E "median|byte for byte|DIFFERS" "$out/bench.log"
+}
+
 case ${1:-} in
 prepare) prepare ;;
 run) run "${2:?usage: gpu_check.sh run OUT [quick]}" "${3:-}" ;;
+bench) bench "${2:?usage: gpu_check.sh bench OUT [COMMIT]}" "${3:-}" ;;
 *)
-    echo "usage: scripts/gpu_check.sh prepare | run OUT [quick]" >&2
+    echo "usage: scripts/gpu_check.sh prepare | run OUT [quick] | bench OUT [COMMIT]" >&2
     exit 2
     ;;
 esac

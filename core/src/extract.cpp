@@ -285,7 +285,7 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
     // Lattice domains number nodes in global order, so this is a no-op there.
     // Keys repeat only if node ids do, which check_domain refuses.
     if (!order_by_key(piece))
-        throw Error(domain_name(domain.id) + ": internal error: two vertices of the surface share a key");
+        throw InternalError(domain_name(domain.id) + ": two vertices of the surface share a key");
     piece.domains = {domain.id};
     return piece;
 }

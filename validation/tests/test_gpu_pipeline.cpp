@@ -78,7 +78,9 @@ TEST_P(GpuDomainTask, IsTheCpuPieceByteForByte) {
         EXPECT_TRUE(same_piece(cpu, the_gpu().extract_and_reduce(decomposition, d, *field, level, o))) << "domain " << d;
     }
     EXPECT_GT(reduced, 0u);
-    if (c.domains > 1) EXPECT_GT(locked, 0u); // the interfaces were crossed and stayed
+    if (c.domains > 1) {
+        EXPECT_GT(locked, 0u); // the interfaces were crossed and stayed
+    }
 }
 
 INSTANTIATE_TEST_SUITE_P(Fields, GpuDomainTask,

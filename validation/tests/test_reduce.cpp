@@ -791,6 +791,22 @@ TEST(Reduce, OutputDoesNotDependOnThreadsOrRuns) {
     EXPECT_GT(a.sample_count(), 0u);
 }
 
+// A fault of tetiso's own (a surface the operations broke) is not the
+// input's: callers that report bad input must not catch it as such, and the
+// command line gives it its own exit status.
+TEST(Reduce, InternalFaultsAreNotInputErrors) {
+    bool taken_for_input = false, reported = false;
+    try {
+        throw InternalError("tetiso::reduce: vertex (key 1) became non-manifold");
+    } catch (const Error&) {
+        taken_for_input = true;
+    } catch (const std::exception& e) {
+        reported = std::string(e.what()).find("non-manifold") != std::string::npos;
+    }
+    EXPECT_FALSE(taken_for_input);
+    EXPECT_TRUE(reported);
+}
+
 // The job lends a running reduction more cores between rounds
 // (ReduceOptions::more_threads): the count changing mid-call must not
 // change the result either.

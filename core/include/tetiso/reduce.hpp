@@ -36,8 +36,8 @@ struct ReduceOptions {
     // at 0.25 h, 16x with no bound).
     double phi = 0.9;
     // Threads; 0 means OpenMP's default. The output does not depend on it.
-    // A round uses at most 8 of them, offered more or not: past 8 its joins
-    // cost more than they share (measured, reduce.cpp).
+    // A round uses at most 16 of them, offered more or not: past that its
+    // joins cost more than they share.
     int threads = 1;
     // Where set, asked before every round for the threads that round may use
     // (0 or less: keep the current count); lets a job hand a running

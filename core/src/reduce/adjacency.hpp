@@ -245,8 +245,7 @@ void build_fans(Exec& exec, Surface<Exec>& s, bool validate, Fans<Exec>& fans) {
     const i32 v = exec.get(faulty, 0);
     const u8 what = exec.get(fans.problem, v);
     if (!validate)
-        throw Error("tetiso::reduce: internal error: vertex (key " + key_text(exec.get(s.key, v)) +
-                    ") became non-manifold");
+        throw InternalError("tetiso::reduce: vertex (key " + key_text(exec.get(s.key, v)) + ") became non-manifold");
     const i32 u = exec.get(fans.problem_other, v);
     std::ostringstream m;
     m << "tetiso::reduce: the input is not an oriented 2-manifold: ";
