@@ -138,9 +138,12 @@ public:
     };
 
     template <class Function>
-    void for_each(i64 n, const Function& function, Grain = Grain::kCheap, const char* file = __builtin_FILE(), int line = __builtin_LINE()) const {
+    void for_each(i64 n, const Function& function, Grain grain = Grain::kCheap, const char* file = __builtin_FILE(),
+                  int line = __builtin_LINE()) const {
         const Timed timed(*this, "for_each", file, line);
-        cuda::for_each(stream_, n, function);
+        if (grain != Grain::kTests || n <= 0) return cuda::for_each(stream_, n, function);
+        cuda::for_each_heavy_kernel<<<cuda::blocks_for(n), cuda::kBlock, 0, stream_>>>(n, function);
+        cuda::check_launch("for_each (tests)");
     }
 
     // function(i) for i < max(*n, min_n), n in device memory and at most

@@ -292,7 +292,7 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
         // Bounds are not negative: their bits order as they do.
         if (placed.triangle < 0) hd::atomic_store(outcome + k, kOutcomeIllegal);
         else hd::atomic_max(worst + k, hd::bits(placed.bound));
-    });
+    }, Grain::kTests);
     exec.for_each(n, [=] TETISO_HD(i64 k) {
         if (outcome[k] == kOutcomeUndecided) test.dry.err[order[k]] = static_cast<float>(hd::from_bits(worst[k]));
     });
@@ -448,6 +448,14 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
                     v.claim_around<Flips>(slot.e, claim_rank, slot.rank);
                     return;
                 }
+                // The device always speculates for collapses: the test is not
+                // compiled into its steps, whose every thread would otherwise
+                // reserve the test's registers and stack. (The casts capture
+                // what only that branch uses: CUDA's extended lambdas may not
+                // capture inside an if constexpr.)
+                (void)test;
+                (void)refused;
+                if constexpr (Exec::kHost || Flips) {
                 // A decided operation's owned corners were clear when it
                 // reserved them, and only an earlier operation, all decided
                 // now, could have claimed them; a test-only one's were
@@ -464,6 +472,7 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
                 }
                 chosen[slot.e] = kChosen;
                 v.claim_around<Flips>(slot.e, nullptr, 0);
+                }
             }, Grain::kTests);
             current = 1 - current;
         }
