@@ -38,7 +38,7 @@ TARGET_DOMAIN_SECONDS = 0.015  # one 10^6-node domain task, nothing to reduced p
 # surface written once each. About 1.5 edges and 0.5 vertices a triangle.
 BYTES_PER_TRIANGLE_ROUND = 12 + 6 + 36 + 18 + 32 + 8 + 37 + 12 + 24 + 16
 
-NAME = r"^(?P<case>reduce/(?P<who>gpu|tetiso|meshopt)/N:(?P<n>\d+)(/threads:(?P<threads>\d+))?|domain/(?P<dwho>gpu|tetiso)/N:(?P<dn>\d+)/D:(?P<dd>\d+)|copy/gpu)(/manual_time|/real_time)?$"
+NAME = r"^(?P<case>reduce/(?P<who>gpu|tetiso|meshopt)/N:(?P<n>\d+)(/threads:(?P<threads>\d+))?|domain/(?P<dwho>gpu|tetiso)/N:(?P<dn>\d+)/D:(?P<dd>\d+)|copy/gpu)(/repeats:\d+)?(/manual_time|/real_time)?$"
 
 
 def key(match):
@@ -53,6 +53,12 @@ def fmt_ms(seconds):
     return f"{seconds * 1e3:,.1f}" if seconds < 10 else f"{seconds * 1e3:,.0f}"
 
 
+# The backend's primitives that read a value back (a size, a count), each
+# waiting for the device, and those that only launch work.
+READS_BACK = ("get", "count", "exclusive_scan", "filter", "rank", "copy_if")
+LAUNCHES = ("for_each", "for_each_of", "assign", "set")
+
+
 def profile_rows(path, top=10):
     """(milliseconds, calls, site) of the profile's heaviest call sites, and its total."""
     total, rows = None, []
@@ -64,6 +70,11 @@ def profile_rows(path, top=10):
         if m:
             rows.append((float(m.group(1)), int(m.group(2)), f"{m.group(3)} at {m.group(4)}"))
     return total, rows[:top]
+
+
+def shown(command):
+    """A command as run on the device machine, its output folder named OUT."""
+    return re.sub(r"/\S*/(?=[a-z_0-9]+\.json)", "OUT/", command)
 
 
 def main(argv):
@@ -96,7 +107,8 @@ def main(argv):
     triangle_rounds = sum(r["triangles"] for r in round_rows)
     floor_bytes = triangle_rounds * BYTES_PER_TRIANGLE_ROUND
     floor_s = floor_bytes / bandwidth
-    tail = [r["seconds"] for r in round_rows if r["triangles"] < 1.1 * round_rows[-1]["triangles"]]
+    # Rounds with almost nothing to test: what a round costs whatever its work.
+    tail = [r["seconds"] for r in round_rows if r["candidates"] < 5000]
     fixed = sorted(tail)[len(tail) // 2] if tail else float("nan")
 
     lines = [
@@ -152,6 +164,10 @@ def main(argv):
     lines += ["- The targets were stated for an H100; this GPU has the same multiprocessors and more memory "
               "bandwidth.", ""]
 
+    total, prof = profile_rows(out / "profile_n100.txt", top=1000)
+    per_round_reads = sum(c for _, c, site in prof if site.split(" ")[0] in READS_BACK) / len(round_rows)
+    per_round_launches = sum(c for _, c, site in prof if site.split(" ")[0] in LAUNCHES) / len(round_rows)
+    sorts = sum(ms for ms, _, site in prof if site.startswith(("order_by_priority", "group_by_key")))
     lines += ["## Where the time goes", "",
               f"![time per round](rounds.png)", "",
               f"- **Memory bandwidth is not the limit.** A device-to-device copy moves "
@@ -160,15 +176,20 @@ def main(argv):
               f"{BYTES_PER_TRIANGLE_ROUND} bytes a triangle and round (every array of a round written once and "
               f"read once) that is {floor_bytes / 1e9:.2f} GB, {floor_s * 1e3:.2f} ms at that bandwidth: the "
               f"reduction takes {gpu_s / floor_s:.0f}× as long.",
-              f"- **Each round costs at least about {fixed * 1e3:.1f} ms** (the median of the last rounds, which "
-              f"change almost nothing): its launches, the host's reads of the sizes it needs (a list's length, the "
-              f"end of the selection), and the latency of its longest legality test, one thread's serial work. "
-              f"{len(round_rows)} rounds make {len(round_rows) * fixed * 1e3:.0f} ms of it.",
+              f"- **Each round costs at least about {fixed * 1e3:.1f} ms** (the median of the rounds with fewer "
+              f"than 5,000 candidates): about {per_round_launches:.0f} launches besides those of CUB's sorts and scans, "
+              f"{per_round_reads:.0f} reads by the host of a value it needs (a list's length, the end of the "
+              f"selection), each waiting for the device, and the latency of the "
+              f"round's slowest legality test, one thread's serial work. {len(round_rows)} rounds make "
+              f"{len(round_rows) * fixed * 1e3:.0f} ms of it: with rounds as they are, the {triangles_in / TARGET_RATE * 1e3:.0f} ms "
+              f"target needs fewer host reads (sizes kept on the device, rounds captured as graphs) as much as "
+              f"faster tests.",
               "- **The rest is the legality tests**, run for every candidate of a round at once (speculation: the "
               "selection then waits only on legal operations): their work grows with the round's size, and the "
               "first rounds, with millions of candidates, take most of the time.",
-              ""]
-    total, prof = profile_rows(out / "profile_n100.txt")
+              f"- **Sorts** (the priority order of the candidates and flips, the grouping of corners by vertex and "
+              f"of samples by face) take {sorts:.1f} ms of the profile's {total * 1e3:.0f}.", ""]
+    prof = prof[:10]
     if prof:
         lines += [f"By call site of the round driver (`TETISO_GPU_PROFILE=1`, which waits for the device around "
                   f"every primitive, so its {total:.3f} s add up to more than the plain run's), the heaviest:", "",
@@ -193,7 +214,8 @@ def main(argv):
     lines += ["## Command, machine, commit", "",
               f"- Command: `{meta['script_cmd']}` on the device machine, after `scripts/gpu_check.sh prepare` here "
               "(Debian 12, g++ 12, nvcc 13.0, Release, `-DCMAKE_CUDA_ARCHITECTURES=90`); it ran", "", "  ```",
-              f"  {meta['bench_cmd']}", f"  {meta['reduce_cmd']}", "  ```", "",
+              f"  {shown(meta['bench_cmd'])}", f"  {shown(meta['reduce_cmd'])}", "  ```", "",
+              "  with OUT the folder the files here were copied from.", "",
               f"- Build: {meta['source_state']}",
               f"- GPU: {meta.get('gpu', '?')}",
               f"- Host: {meta['cpu_model']}, {meta['cpus']} CPUs ({meta['cores_per_socket']} cores per socket), "
