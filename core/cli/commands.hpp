@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -24,6 +25,18 @@ void add_split_command(CLI::App& app, Command& run);
 
 // --phi, shared by every command that reduces.
 void add_phi_option(CLI::App& cmd, double& phi);
+
+// The checks every command applies to the options of the same kind, so that
+// one value is refused, or taken, the same way by each (a NaN passes a
+// "non-negative" test, and CLI11's own messages print ranges of 300 digits).
+// A count of domains: a whole number, at least 1.
+const CLI::Validator& domain_count_check();
+// A distance bound: a finite number, at least 0.
+const CLI::Validator& error_bound_check();
+// --threads: 0 (all cores) to kMaxThreads.
+void add_threads_option(CLI::App& cmd, int& threads, const std::string& description);
+// --level: a finite number that fits a float, the type of field values.
+void add_level_option(CLI::App& cmd, std::optional<double>& level, const std::string& description);
 
 // --device cpu|gpu and --gpu N, shared by the commands that can run on a GPU.
 struct DeviceChoice {

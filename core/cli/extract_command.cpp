@@ -247,22 +247,18 @@ void add_extract_command(CLI::App& app, Command& run) {
         "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--domains", args->domains, "Number of domains (recursive coordinate bisection)")
-        ->check(CLI::PositiveNumber);
+        ->check(domain_count_check());
     cmd->add_option("--field", args->field,
                     std::string("Built-in field (") + builtin_field_names() + ") or an expression in x, y, z")
         ->capture_default_str();
-    cmd->add_option_function<double>(
-        "--level", [args](double level) { args->level = level; },
-        "Isosurface level (default: the field's own, 0.5 for paper)");
-    cmd->add_option("--threads", args->threads, "Threads inside a domain (0 = all cores); output does not depend on it")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+    add_level_option(*cmd, args->level, "Isosurface level (default: the field's own, 0.5 for paper)");
+    add_threads_option(*cmd, args->threads, "Threads inside a domain (0 = all cores); output does not depend on it");
     add_device_options(*cmd, args->device, "the marching tetrahedra and the reduction");
     cmd->add_flag("--reduce", args->reduce, "Reduce the combined surface (parallel edge collapse and flip)");
     add_phi_option(*cmd, args->reduce_options.phi);
     cmd->add_option("--max-error", args->max_error_spacings,
                     "With --reduce: bound on the distance to the raw surface, in lattice spacings (mean tetrahedron edge lengths with --mesh; 0: none)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(error_bound_check())
         ->capture_default_str();
     cmd->add_option("-o,--output", args->output, "Output surface, .ply or .vtp")->required();
     cmd->add_option("--report", args->report, "Write a JSON report here");

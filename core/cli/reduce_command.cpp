@@ -115,10 +115,8 @@ void add_reduce_command(CLI::App& app, Command& run) {
            "Bound on the distance to the input surface, absolute (0: none; default: 0.4 x mean edge length); "
            "for an input that carries tetiso_error_bound (a reduction's output), on the distance to the raw surface it "
            "stands for")
-        ->check(CLI::NonNegativeNumber);
-    cmd->add_option("--threads", args->options.threads, "Threads (0 = all cores); output does not depend on it")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+        ->check(error_bound_check());
+    add_threads_option(*cmd, args->options.threads, "Threads (0 = all cores); output does not depend on it");
     add_device_options(*cmd, args->device, "the rounds");
     cmd->add_option("--report", args->report, "Write a JSON report here");
     cmd->callback([&run, args] { run = [args] { run_reduce(*args); }; });

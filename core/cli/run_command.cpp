@@ -179,7 +179,7 @@ void add_run_command(CLI::App& app, Command& run) {
     CLI::Option* domains = cmd->add_option("--domains", job.domains,
                                            "Number of domains (the lattice: recursive coordinate bisection; a mesh "
                                            "without --partition: METIS; with it, its domain count if given)")
-                               ->check(CLI::PositiveNumber);
+                               ->check(domain_count_check());
     cmd->add_option("--field", job.field,
                     std::string("Built-in field (") + builtin_field_names() + ") or an expression in x, y, z")
         ->capture_default_str()
@@ -188,14 +188,12 @@ void add_run_command(CLI::App& app, Command& run) {
            "--attribute", [args](int k) { args->job.attribute = k; },
            "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
         ->needs(mesh);
-    cmd->add_option_function<double>(
-        "--level", [args](double level) { args->job.level = level; },
-        "Isosurface level (default: the field's own, 0.5 for paper; 0 for --attribute)");
+    add_level_option(*cmd, job.level, "Isosurface level (default: the field's own, 0.5 for paper; 0 for --attribute)");
     add_phi_option(*cmd, job.reduce_options.phi);
     cmd->add_option("--max-error", job.max_error_spacings,
                     "Bound on the distance to the raw surface, in spacings: the lattice's, or a mesh's mean "
                     "edge length (0: none)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(error_bound_check())
         ->capture_default_str();
     cmd->add_option("--seam-rings", job.seam_rings,
                     "How far from a seam its reduction reaches, in edges (the rest of the pieces is left as it is)")
@@ -207,9 +205,7 @@ void add_run_command(CLI::App& app, Command& run) {
         ->check(CLI::Range(-1, 64))
         ->capture_default_str();
     cmd->add_flag("!--no-reduce", job.reduce, "Extract and seam only");
-    cmd->add_option("--threads", job.threads, "Threads inside each task (0 = all cores)")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+    add_threads_option(*cmd, job.threads, "Threads inside each task (0 = all cores)");
     cmd->add_option("-o,--output", args->output, "Output surface, .ply or .vtp")->required();
     cmd->add_option("--report", args->report, "Write a JSON report (totals and one record per task) here");
     cmd->add_flag("--quiet", args->quiet, "No progress lines on stderr");

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
@@ -91,6 +92,11 @@ std::unique_ptr<Partition> make_partition(const JobConfig& config, std::unique_p
 } // namespace
 
 Job::Job(const JobConfig& config) : config_(config) {
+    if (config.threads < 0 || config.threads > kMaxThreads)
+        throw Error(std::to_string(config.threads) + " threads per task: give 0 (all cores) to " +
+                    std::to_string(kMaxThreads));
+    if (!std::isfinite(config.max_error_spacings) || config.max_error_spacings < 0)
+        throw Error("error bound " + std::to_string(config.max_error_spacings) + " is not a finite number >= 0");
     std::unique_ptr<Field> field = make_field(config.field);
     // An attribute has no level of its own; an analytic field does, and a
     // split mesh keeps the one it was written with.
@@ -99,6 +105,8 @@ Job::Job(const JobConfig& config) : config_(config) {
     if (const auto* split = dynamic_cast<const SplitMeshPartition*>(partition_.get())) default_level = split->default_level();
     const double level = config.level.value_or(default_level);
     if (!std::isfinite(level)) throw Error("isosurface level is not a finite number");
+    if (std::abs(level) > std::numeric_limits<float>::max())
+        throw Error("isosurface level " + std::to_string(level) + " does not fit a float, the type of field values");
     level_ = static_cast<float>(level);
     tree_ = task_tree(partition_->tree());
     reduce_options_ = config.reduce_options;

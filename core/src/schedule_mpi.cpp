@@ -222,7 +222,7 @@ public:
         }
         if (taken == 0 || !known_) return 0;
         lends_ += taken;
-        const int threads = per_worker_ * (1 + lends_);
+        const int threads = std::min(per_worker_ * (1 + lends_), kMaxThreads);
         most_ = std::max(most_, threads);
         run_on(cores_, threads);
         return threads;
@@ -357,7 +357,7 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
         record.start = seconds();
         int threads = job.config().threads;
         if (own_cores_known) {
-            threads = std::max(1, threads) * ranks;
+            threads = std::min(std::max(1, threads) * ranks, kMaxThreads);
             run_on(job_cores, threads);
         }
         auto back_home = [&] {

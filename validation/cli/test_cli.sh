@@ -42,6 +42,41 @@ expect 2 "expression with an unknown variable" -- "$tetiso" extract --lattice 10
 expect 2 "N < 2" -- "$tetiso" extract --lattice 1 -o "$out/s.ply"
 expect 2 "D < 1" -- "$tetiso" extract --lattice 10 --domains 0 -o "$out/s.ply"
 expect 2 "more domains than cells" -- "$tetiso" extract --lattice 3 --domains 9 -o "$out/s.ply"
+ # Every command takes the same range of thread counts; far above it libgomp
+# overflowed its stack (SIGSEGV, nothing said) or could not create them.
+for command in "extract --lattice 20" "run --lattice 20 --domains 2 --quiet"; do
+    for threads in 100000 50000 -1 1.5; do
+        # shellcheck disable=SC2086 # the command is several arguments
+        expect 2 "$command --threads $threads" -- "$tetiso" $command --threads "$threads" -o "$out/s.ply"
+    done
+done
+"$tetiso" extract --lattice 12 --field sphere -o "$work/small.ply"
+expect 2 "reduce --threads 100000" -- "$tetiso" reduce "$work/small.ply" --threads 100000 -o "$out/r.ply"
+grep -q -- "--threads: 100000 is outside 0 (all cores) to 1024" "$work/stderr" && passed=$((passed + 1)) ||
+    { echo "FAIL: a thread count's error does not give the range: $(cat "$work/stderr")"; failures=$((failures + 1)); }
+# One check per kind of option, the same in every command: a NaN bound is no
+# bound at all (run took it as "none"), a level must fit a float (and be
+# called finite when it is), a domain count says so without a 300-digit range.
+for bound in nan inf -inf -1; do
+    expect 2 "extract --max-error $bound" -- "$tetiso" extract --lattice 10 --reduce --max-error "$bound" -o "$out/s.ply"
+    expect 2 "run --max-error $bound" -- "$tetiso" run --lattice 10 --domains 2 --max-error "$bound" -o "$out/s.ply"
+    expect 2 "reduce --max-error $bound" -- "$tetiso" reduce "$work/small.ply" --max-error "$bound" -o "$out/r.ply"
+done
+for command in "extract --lattice 10" "run --lattice 10 --domains 2"; do
+    # shellcheck disable=SC2086
+    expect 2 "$command --level 1e39" -- "$tetiso" $command --level 1e39 -o "$out/s.ply"
+    grep -q "1e39 does not fit a float" "$work/stderr" && passed=$((passed + 1)) ||
+        { echo "FAIL: $command: a level too large for a float: $(cat "$work/stderr")"; failures=$((failures + 1)); }
+    # shellcheck disable=SC2086
+    expect 2 "$command --level nan" -- "$tetiso" $command --level nan -o "$out/s.ply"
+done
+for command in "extract --lattice 10" "run --lattice 10" "split --mesh meshes/cube.1"; do
+    # shellcheck disable=SC2086
+    expect 2 "$command --domains 0" -- "$tetiso" $command --domains 0 -o "$out/s.ply"
+    grep -q -- "--domains: must be at least 1, not 0" "$work/stderr" && [ "$(wc -c <"$work/stderr")" -lt 100 ] &&
+        passed=$((passed + 1)) ||
+        { echo "FAIL: $command: --domains 0's error: $(cat "$work/stderr")"; failures=$((failures + 1)); }
+done
 expect 2 "unwritable output directory" -- "$tetiso" extract --lattice 10 -o "$out/missing/s.ply"
 expect 2 "unknown output format" -- "$tetiso" extract --lattice 10 -o "$out/s.stl"
 expect 2 "check of a missing file" -- "$tetiso" check "$out/nothing.ply"
@@ -104,6 +139,10 @@ if [ $? -eq 0 ] && cmp -s "$work/split3.ply" "$work/mesh3.ply"; then
 else
     echo "FAIL: the job over a split differs from the job over the mesh"; failures=$((failures + 1))
 fi
+# A split into one domain has no shared edges, empty arrays in its files.
+expect 0 "split into one domain" -- "$tetiso" split --mesh "$meshes/cube.1" --field sphere --domains 1 --quiet -o "$out/s1"
+"$tetiso" split --mesh "$meshes/cube.1" --field sphere --domains 1 --quiet -o "$work/split1"
+expect 0 "run over a one-domain split" -- "$tetiso" run --split "$work/split1" --quiet -o "$out/s1.ply"
 expect 2 "split without --domains or --partition" -- "$tetiso" split --mesh "$meshes/cube.1" -o "$out/s"
 expect 2 "split of a missing mesh" -- "$tetiso" split --mesh "$out/none" --domains 2 -o "$out/s"
 expect 2 "split into a directory that holds files" -- "$tetiso" split --mesh "$meshes/cube.1" --partition "$work/three.part" -o "$work/split3"

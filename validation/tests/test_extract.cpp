@@ -175,6 +175,22 @@ TEST(Extract, LevelOutsideTheRangeGivesAnEmptySurface) {
     EXPECT_EQ(empty.vertex_count(), 0u);
 }
 
+// OpenMP takes any thread count; libgomp overflowed its stack at 10^5
+// (SIGSEGV) and could not create 5 * 10^4. Above kMaxThreads it is an error.
+TEST(Extract, ThreadCountsAboveTheLimitAreRefused) {
+    const Decomposition one(Lattice(6), 1);
+    const Domain domain = one.make_domain(0, *make_field("sphere"));
+    EXPECT_NO_THROW(extract(domain, 2.0f, ExtractOptions{2}));
+    for (const int threads : {kMaxThreads + 1, 50000, 100000}) {
+        try {
+            extract(domain, 2.0f, ExtractOptions{threads});
+            ADD_FAILURE() << threads << " threads were accepted";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("at most " + std::to_string(kMaxThreads)), std::string::npos) << e.what();
+        }
+    }
+}
+
 TEST(Extract, BadDomainsAreRefusedWithAClearError) {
     const Lattice lattice(4);
     const Decomposition one(lattice, 1);
