@@ -46,7 +46,7 @@ public:
     template <class T>
     void put_array(const std::vector<T>& values) {
         put(static_cast<std::uint64_t>(values.size()));
-        bytes_.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+        if (!values.empty()) bytes_.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
     }
     void put_string(const std::string& text) {
         put(static_cast<std::uint64_t>(text.size()));
@@ -101,7 +101,9 @@ public:
         const auto count = get<std::uint64_t>();
         if (count > (end_ - at_) / sizeof(T)) fail(std::string("truncated in ") + name);
         std::vector<T> values(static_cast<std::size_t>(count));
-        std::memcpy(values.data(), bytes_.data() + at_, values.size() * sizeof(T));
+        // An empty array (a one-domain split shares no edges) has no data()
+        // to copy into: memcpy must not be given null, even for 0 bytes.
+        if (count > 0) std::memcpy(values.data(), bytes_.data() + at_, values.size() * sizeof(T));
         at_ += values.size() * sizeof(T);
         return values;
     }
