@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tetiso/gpu.hpp"
+#include "tetiso/io.hpp"
 #include "tetiso/reduce.hpp"
 
 namespace tetiso::cli {
@@ -61,11 +62,14 @@ double mean_edge_length(const Piece& piece);
 nlohmann::json reduce_json(const ReduceReport& report);
 
 // Fails early, before any work, if `path` cannot be created: its directory
-// must exist and be writable, and it must not be a directory.
+// (that of the file a link there names) must exist and be writable, and it
+// must not be a directory, a device, a pipe or a socket.
 void require_writable(const std::filesystem::path& path);
 
-// Writes a JSON report atomically (never a half-written file).
-void write_report(const nlohmann::json& report, const std::filesystem::path& path);
+// Writes a JSON report as one of the command's outputs, which are renamed
+// into place together by output.commit() (never a half-written file, nor a
+// surface without the report asked for).
+void write_report(const nlohmann::json& report, const std::filesystem::path& path, OutputFiles& output);
 
 // Seconds since an arbitrary start, for stage timings.
 double now_seconds();

@@ -1,5 +1,7 @@
 // Helpers shared by the subcommands: output checks and reports.
+#include <cerrno>
 #include <charconv>
+#include <cstring>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -82,7 +84,7 @@ void add_level_option(CLI::App& cmd, std::optional<double>& level, const std::st
 }
 
 void require_writable(const std::filesystem::path& path) {
-    std::filesystem::path directory = path.parent_path();
+    std::filesystem::path directory = detail::output_target(path).parent_path();
     if (directory.empty()) directory = ".";
     std::error_code ec;
     if (!std::filesystem::is_directory(directory, ec))
@@ -92,13 +94,13 @@ void require_writable(const std::filesystem::path& path) {
     if (std::filesystem::is_directory(path, ec)) throw Error(path.string() + ": cannot write: it is a directory");
 }
 
-void write_report(const nlohmann::json& report, const std::filesystem::path& path) {
-    write_atomically(path, [&](const std::filesystem::path& temporary) {
+void write_report(const nlohmann::json& report, const std::filesystem::path& path, OutputFiles& output) {
+    output.add(path, [&](const std::filesystem::path& temporary) {
         std::ofstream file(temporary, std::ios::trunc);
-        if (!file) throw Error(path.string() + ": cannot open for writing");
+        if (!file) throw Error(path.string() + ": cannot open for writing: " + std::strerror(errno));
         file << report.dump(2) << '\n';
         file.close();
-        if (!file) throw Error(path.string() + ": write failed");
+        if (!file) throw Error(path.string() + ": cannot write: " + std::strerror(errno));
     });
 }
 

@@ -104,8 +104,9 @@ void run_extract_mesh(const ExtractArguments& args, const Field& field, double s
         surface = extractor.reduce(surface, options, reduce_report);
     }
     const double t3 = now_seconds();
-    write_piece(surface, args.output);
-    if (args.report.empty()) return;
+    OutputFiles output;
+    write_piece(surface, args.output, output);
+    if (args.report.empty()) return output.commit();
     nlohmann::json report = {
         {"command", "extract"},
         {"mesh", args.mesh.string()},
@@ -133,7 +134,8 @@ void run_extract_mesh(const ExtractArguments& args, const Field& field, double s
         report["phi"] = args.reduce_options.phi;
         report["max_error"] = args.max_error_spacings * spacing;
     }
-    write_report(report, args.report);
+    write_report(report, args.report, output);
+    output.commit();
 }
 
 void run_extract(const ExtractArguments& args) {
@@ -198,7 +200,8 @@ void run_extract(const ExtractArguments& args) {
         surface = extractor.reduce(surface, options, reduce_report);
     }
     const double t_write = now_seconds();
-    write_piece(surface, args.output);
+    OutputFiles output;
+    write_piece(surface, args.output, output);
     const double write_seconds = now_seconds() - t_write;
 
     if (!args.report.empty()) {
@@ -229,8 +232,9 @@ void run_extract(const ExtractArguments& args) {
             report["phi"] = args.reduce_options.phi;
             report["max_error"] = args.max_error_spacings * lattice.spacing();
         }
-        write_report(report, args.report);
+        write_report(report, args.report, output);
     }
+    output.commit();
 }
 
 } // namespace

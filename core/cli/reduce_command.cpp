@@ -87,7 +87,8 @@ void run_reduce(const ReduceArguments& args) {
     }
     ReduceReport report;
     const Piece output = gpu ? gpu->reduce(input, options, &report) : reduce(input, options, &report);
-    write_piece(output, args.output);
+    OutputFiles files;
+    write_piece(output, args.output, files);
     if (!args.report.empty()) {
         nlohmann::json json = reduce_json(report);
         json["command"] = "reduce";
@@ -98,8 +99,9 @@ void run_reduce(const ReduceArguments& args) {
         json["threads"] = options.threads;
         json["device"] = device_json(gpu.get(), gpu ? gpu->last_timings() : GpuTimings{});
         json["total_seconds"] = now_seconds() - start;
-        write_report(json, args.report);
+        write_report(json, args.report, files);
     }
+    files.commit();
 }
 
 } // namespace

@@ -112,9 +112,10 @@ void run_job(const RunArguments& args) {
     if (!result) return; // a worker
 
     const double t_write = now_seconds();
-    write_piece(result->surface, args.output);
+    OutputFiles output;
+    write_piece(result->surface, args.output, output);
     const double write_seconds = now_seconds() - t_write;
-    if (args.report.empty()) return;
+    if (args.report.empty()) return output.commit();
 
     std::uint64_t raw = 0;
     nlohmann::json tasks = nlohmann::json::array();
@@ -152,7 +153,8 @@ void run_job(const RunArguments& args) {
         {"seconds", {{"job", result->seconds}, {"write", write_seconds}, {"total", now_seconds() - start}}},
         {"tasks", tasks},
     };
-    write_report(report, args.report);
+    write_report(report, args.report, output);
+    output.commit();
 }
 
 } // namespace

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -59,7 +60,7 @@ public:
         std::ofstream out(path, std::ios::binary | std::ios::trunc);
         out.write(bytes_.data(), static_cast<std::streamsize>(bytes_.size()));
         out.close();
-        if (!out) throw Error(path.string() + ": cannot write");
+        if (!out) throw Error(path.string() + ": cannot write: " + std::strerror(errno));
         return digest;
     }
 

@@ -159,6 +159,74 @@ else
     echo "FAIL: a damaged domain file's error does not name it: $(cat "$work/stderr")"; failures=$((failures + 1))
 fi
 
+# A command's outputs succeed or fail together: under a file-size limit of
+# 1 KiB the empty surface (279 bytes) fits and the report (7 KB) does not,
+# and neither may be left behind. The error names the output, not its
+# temporary, and says why.
+# (extract's report of an empty surface is under 1 KiB: its surface fails.)
+expect 2 "run with a report past the file-size limit" -- bash -c 'ulimit -f 1; exec "$@"' - \
+    "$tetiso" run --lattice 10 --domains 8 --quiet --level 100 -o "$out/e.ply" --report "$out/r.json"
+failed_write() {
+    grep -qE "$1: cannot write: File too large$" "$work/stderr" && ! grep -qE "\.(ply|json)\.tmp\." "$work/stderr" &&
+        passed=$((passed + 1)) ||
+        { echo "FAIL: a failed write's error: $(cat "$work/stderr")"; failures=$((failures + 1)); }
+}
+failed_write out/r.json
+expect 2 "extract past the file-size limit" -- bash -c 'ulimit -f 1; exec "$@"' - "$tetiso" extract --lattice 30 -o "$out/big.ply"
+failed_write out/big.ply
+# A reduced tetrahedron-sized sphere: 1.8 KB of surface, 3.9 KB of report.
+"$tetiso" extract --lattice 5 --field sphere -o "$work/tiny.ply"
+"$tetiso" reduce "$work/tiny.ply" --phi 0.1 -o "$work/r.ply" --report "$work/r.json" 2>/dev/null
+limit=$(( ($(wc -c <"$work/r.ply") + 1023) / 1024 ))
+if [ "$(wc -c <"$work/r.json")" -gt $((limit * 1024)) ]; then
+    expect 2 "reduce with a report past the file-size limit" -- bash -c "ulimit -f $limit"'; exec "$@"' - \
+        "$tetiso" reduce "$work/tiny.ply" --phi 0.1 -o "$out/r.ply" --report "$out/r.json"
+    failed_write out/r.json
+else
+    echo "FAIL: the reduce report no longer outgrows its surface; the test needs another case"; failures=$((failures + 1))
+fi
+
+# An output path that is not a regular file is refused, never replaced by
+# one (as root, -o of /dev/null would have replaced the device); a symbolic
+# link is written through, to the file it names, and stays a link.
+mkfifo "$out/pipe.json"
+"$tetiso" extract --lattice 10 -o "$work/p.ply" --report "$out/pipe.json" 2>"$work/stderr"
+if [ $? -eq 2 ] && [ -p "$out/pipe.json" ] && [ ! -e "$work/p.ply" ] && grep -q "pipe.json: cannot write: it is a pipe" "$work/stderr"; then
+    passed=$((passed + 1))
+else
+    echo "FAIL: a pipe as the report: $(cat "$work/stderr")"; failures=$((failures + 1))
+fi
+rm -f "$out/pipe.json"
+mkdir -p "$work/elsewhere" && rm -f "$work/elsewhere/target.ply" "$work/link.ply"
+ln -s "$work/elsewhere/target.ply" "$work/link.ply"
+if "$tetiso" extract --lattice 10 -o "$work/link.ply" && [ -L "$work/link.ply" ] && [ -s "$work/elsewhere/target.ply" ] &&
+    [ -z "$(ls "$work/elsewhere" | grep tmp)" ]; then
+    passed=$((passed + 1))
+else
+    echo "FAIL: an output through a symbolic link"; failures=$((failures + 1))
+fi
+
+# A writer killed before it could clean up (SIGKILL; SIGXFSZ before tetiso
+# ignored it) leaves OUT.tmp.PID.N: the next write of OUT removes those whose
+# process is gone, and only those.
+touch "$work/again.ply.tmp.4194399.17" "$work/again.ply.tmp.$$.18" "$work/again.ply.tmp.notes"
+"$tetiso" extract --lattice 10 -o "$work/again.ply"
+if [ ! -e "$work/again.ply.tmp.4194399.17" ] && [ -e "$work/again.ply.tmp.$$.18" ] && [ -e "$work/again.ply.tmp.notes" ]; then
+    passed=$((passed + 1))
+else
+    echo "FAIL: stale temporaries: $(ls "$work" | grep again)"; failures=$((failures + 1))
+fi
+
+# An error that quotes a file's bytes stays on one line: a newline or a
+# control byte in a VTP attribute is escaped.
+"$tetiso" extract --lattice 8 --field sphere -o "$work/quoted.vtp"
+python3 -c "
+import sys; p = sys.argv[1]; b = open(p, 'rb').read()
+open(p, 'wb').write(b.replace(b'NumberOfPoints=\"', b'NumberOfPoints=\"1\n2\x1b[31m', 1))" "$work/quoted.vtp"
+expect 2 "an attribute with a newline" -- "$tetiso" check "$work/quoted.vtp"
+grep -qF '1\n2\x1b[31m' "$work/stderr" && passed=$((passed + 1)) ||
+    { echo "FAIL: control bytes are not escaped: $(cat -A "$work/stderr")"; failures=$((failures + 1)); }
+
 # A level outside the range: an empty surface, said so on stderr, exit 0.
 "$tetiso" extract --lattice 10 --field sphere --level 50 -o "$work/empty.ply" 2>"$work/stderr"
 if [ $? -eq 0 ] && grep -q "outside the field's range" "$work/stderr" && [ -s "$work/empty.ply" ]; then
