@@ -77,6 +77,10 @@ void run_job(const RunArguments& args) {
         built = std::make_unique<Job>(args.job);
     } catch (const Error& e) {
         setup_problem = e.what();
+    } catch (const std::bad_alloc&) {
+        // Left to propagate, it would finalise MPI on this rank alone while
+        // the others wait below for its answer.
+        setup_problem = "out of memory while setting up the job";
     }
     if (!mpi.all(setup_problem.empty())) {
         if (!setup_problem.empty()) throw Error(setup_problem);

@@ -223,7 +223,13 @@ std::optional<JobResult> run_mpi(const Job& job, const Progress& progress);
 
 // MPI for the lifetime of the object, when launched_with_mpi(); otherwise a
 // single rank of one. Finalises on destruction, also when unwinding from an
-// error, so that every rank leaves cleanly.
+// error, so that every rank leaves cleanly. The constructor checks that every
+// rank can reach every other (a rank whose transport failed to start, e.g.
+// its shared memory could not be mapped, would leave the others waiting in
+// their first collective for ever): where that takes more than
+// kMpiStartSeconds, rank 0 says so and the job is aborted.
+inline constexpr int kMpiStartSeconds = 10;
+
 class MpiSession {
 public:
     MpiSession();
