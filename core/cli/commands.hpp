@@ -71,6 +71,11 @@ void require_writable(const std::filesystem::path& path);
 // surface without the report asked for).
 void write_report(const nlohmann::json& report, const std::filesystem::path& path, OutputFiles& output);
 
+// The note on stderr that the surface is empty, the same from every command:
+// whether the level lies outside the field's range [lowest, highest] (left
+// out where lowest > highest, a range not known).
+void note_empty_surface(double level, float lowest, float highest);
+
 // Seconds since an arbitrary start, for stage timings.
 double now_seconds();
 

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <iostream>
 #include <limits>
 
 #include <unistd.h>
@@ -132,6 +133,14 @@ nlohmann::json device_json(const Gpu* gpu, const GpuTimings& seconds) {
               {"download", seconds.download},
               {"extract", seconds.extract},
               {"reduce", seconds.reduce}}}};
+}
+
+void note_empty_surface(double level, float lowest, float highest) {
+    std::cerr << "tetiso: the surface is empty: level " << level;
+    if (lowest <= highest)
+        std::cerr << (level < lowest || level > highest ? " is outside" : " is within") << " the field's range ["
+                  << lowest << ", " << highest << "]";
+    std::cerr << '\n';
 }
 
 double now_seconds() {

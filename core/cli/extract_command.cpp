@@ -78,12 +78,6 @@ private:
     GpuTimings totals_;
 };
 
-void report_empty(double level, float lowest, float highest) {
-    std::cerr << "tetiso: the surface is empty: level " << level
-              << (level < lowest || level > highest ? " is outside" : " is within") << " the field's range ["
-              << lowest << ", " << highest << "]\n";
-}
-
 void run_extract_mesh(const ExtractArguments& args, const Field& field, double start) {
     Extractor extractor(args);
     const double t0 = now_seconds();
@@ -94,7 +88,7 @@ void run_extract_mesh(const ExtractArguments& args, const Field& field, double s
     Piece surface = extractor(domain, static_cast<float>(level));
     const double t2 = now_seconds();
     const auto [lo, hi] = std::minmax_element(domain.f.begin(), domain.f.end());
-    if (surface.triangle_count() == 0 && lo != domain.f.end()) report_empty(level, *lo, *hi);
+    if (surface.triangle_count() == 0 && lo != domain.f.end()) note_empty_surface(level, *lo, *hi);
     ReduceReport reduce_report;
     const double spacing = mean_edge_length(domain);
     if (args.reduce) {
@@ -191,7 +185,7 @@ void run_extract(const ExtractArguments& args) {
             lowest = std::min(lowest, *lo);
             highest = std::max(highest, *hi);
         }
-    if (surface.triangle_count() == 0) report_empty(level, lowest, highest);
+    if (surface.triangle_count() == 0) note_empty_surface(level, lowest, highest);
     ReduceReport reduce_report;
     if (args.reduce) {
         ReduceOptions options = args.reduce_options;

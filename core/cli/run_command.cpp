@@ -3,7 +3,9 @@
 #include <malloc.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <iostream>
+#include <limits>
 
 #include "commands.hpp"
 #include "tetiso/error.hpp"
@@ -114,6 +116,14 @@ void run_job(const RunArguments& args) {
     };
     std::optional<JobResult> result = mpi.size() > 1 ? run_mpi(job, progress) : run_local(job, progress);
     if (!result) return; // a worker
+    if (result->surface.triangle_count() == 0) {
+        float lowest = std::numeric_limits<float>::infinity(), highest = -lowest;
+        for (const TaskRecord& t : result->tasks) {
+            lowest = std::min(lowest, t.field_low);
+            highest = std::max(highest, t.field_high);
+        }
+        note_empty_surface(job.level(), lowest, highest);
+    }
 
     const double t_write = now_seconds();
     OutputFiles output;

@@ -2,6 +2,7 @@
 // scheduling"), shared by the single-process and the MPI runs.
 #include "tetiso/schedule.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -200,6 +201,11 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
         {
             const Domain domain = partition_->make_domain(n.first);
             record.stages.generate = lap();
+            if (!domain.f.empty()) {
+                const auto [low, high] = std::minmax_element(domain.f.begin(), domain.f.end());
+                record.field_low = *low;
+                record.field_high = *high;
+            }
             piece = extract(domain, level_, ExtractOptions{threads.count});
         } // the tetrahedra go before the reduction needs its memory
         record.stages.extract = lap();

@@ -297,6 +297,8 @@ void work(const Job& job) {
             out.put(record.triangles_out);
             out.put(record.samples_out);
             out.put(record.stages);
+            out.put(record.field_low);
+            out.put(record.field_high);
             out.reserve(Packer::piece_size(piece));
             out.put_piece(piece);
             send(out.bytes, 0, kResult);
@@ -549,6 +551,8 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
             record.triangles_out = in.get<std::uint64_t>();
             record.samples_out = in.get<std::uint64_t>();
             record.stages = in.get<TaskRecord::Stages>();
+            record.field_low = in.get<float>();
+            record.field_high = in.get<float>();
             const TaskNode& n = job.node(record.task);
             record.kind = job.kind(record.task);
             record.first_domain = n.first;

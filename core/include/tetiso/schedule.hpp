@@ -13,6 +13,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <set>
@@ -123,6 +124,11 @@ struct TaskRecord {
         std::int32_t gpu = -1;
         double upload = 0, download = 0;
     } stages;
+    // A domain task's lowest and highest field value (none, low > high,
+    // where the values stayed on a GPU): a surface that comes out empty
+    // says whether its level lies outside them.
+    float field_low = std::numeric_limits<float>::infinity();
+    float field_high = -std::numeric_limits<float>::infinity();
 };
 
 struct JobResult {
