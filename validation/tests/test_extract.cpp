@@ -114,6 +114,22 @@ TEST(Extract, LockedVerticesAreExactlyThoseOnSharedEdges) {
     EXPECT_TRUE(std::none_of(combined.flags.begin(), combined.flags.end(), [](std::uint8_t f) { return f & kLocked; }));
 }
 
+// The combined surface is the same arrays for any number of domains, as the
+// README promises of `tetiso extract`: the triangles used to come in the
+// domains' order (the same set, the same orientation, other bytes).
+TEST(Extract, CombinedSurfaceIsTheSameBytesForAnyDomainCount) {
+    for (const char* field : {"paper", "gyroid"}) {
+        const Piece one = lattice_surface(40, 1, field);
+        for (const int domains : {8, 27}) {
+            const Piece many = lattice_surface(40, domains, field);
+            EXPECT_EQ(many.key, one.key) << field << ", " << domains << " domains";
+            EXPECT_EQ(many.x, one.x) << field << ", " << domains << " domains";
+            EXPECT_EQ(many.flags, one.flags) << field << ", " << domains << " domains";
+            EXPECT_EQ(many.triangles, one.triangles) << field << ", " << domains << " domains";
+        }
+    }
+}
+
 TEST(Extract, SurfaceThroughMeshNodesIsConsistentAndManifold) {
     // x = 2.5 at level 0 passes through a whole plane of nodes (i = 5 of 11):
     // every domain must classify them alike.
