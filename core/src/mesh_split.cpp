@@ -256,7 +256,10 @@ SplitMeshPartition::SplitMeshPartition(std::filesystem::path dir) : dir_(std::mo
         bool ok = range_ok && (leaf ? n.count == 1 : child(n.left) && child(n.right));
         if (ok && !leaf) {
             const DomainTreeNode &l = tree_[static_cast<std::size_t>(n.left)], &r = tree_[static_cast<std::size_t>(n.right)];
-            ok = l.first == n.first && r.first == l.first + l.count && l.count + r.count == n.count;
+            // The children are checked in their own turn, later: their sums
+            // here may not fit an int.
+            ok = l.first == n.first && std::int64_t{r.first} == std::int64_t{l.first} + l.count &&
+                 std::int64_t{l.count} + r.count == n.count;
         }
         if (!ok) in.fail("merge tree node " + std::to_string(i) + " is malformed");
     }

@@ -12,6 +12,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -508,6 +510,18 @@ TEST(MeshSplit, DamagedOrMismatchedFilesAreClearErrors) {
     other_version.append(reinterpret_cast<const char*>(&digest), sizeof(digest));
     write_bytes(index, other_version);
     EXPECT_NE(message([&] { SplitMeshPartition{dir}; }).find("format version 2"), std::string::npos);
+    // Found by fuzz_split: the root's children with counts whose sum
+    // overflows an int (UBSan), checked before the children themselves.
+    std::string huge_counts = index_bytes.substr(0, index_bytes.size() - 8);
+    constexpr std::size_t kTreeNodes = 8 + 4 + 4 + 8 + 8 + 8 + 8 + 8 + 8; // magic .. fingerprint, then the node count
+    for (const std::size_t node : {std::size_t{1}, std::size_t{2}}) {
+        const std::int32_t count = -1869574000;
+        std::memcpy(huge_counts.data() + kTreeNodes + node * sizeof(DomainTreeNode) + offsetof(DomainTreeNode, count), &count, 4);
+    }
+    const std::uint64_t huge_digest = split_digest(huge_counts.data(), huge_counts.size());
+    huge_counts.append(reinterpret_cast<const char*>(&huge_digest), sizeof(huge_digest));
+    write_bytes(index, huge_counts);
+    EXPECT_NE(message([&] { SplitMeshPartition{dir}; }).find("merge tree node 0 is malformed"), std::string::npos);
     write_bytes(index, index_bytes);
 
     // A split goes only to a new or empty directory; the old one is left as it was.
