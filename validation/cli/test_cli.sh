@@ -174,6 +174,11 @@ failed_write() {
 failed_write out/r.json
 expect 2 "extract past the file-size limit" -- bash -c 'ulimit -f 1; exec "$@"' - "$tetiso" extract --lattice 30 -o "$out/big.ply"
 failed_write out/big.ply
+# A split that cannot be written says which file and why (it said only
+# "cannot write"), and leaves no directory.
+expect 2 "split past the file-size limit" -- bash -c 'ulimit -f 8; exec "$@"' - \
+    "$tetiso" split --mesh "$meshes/cube.1" --domains 1 --field sphere -o "$out/s"
+failed_write "out/s/domain-0.tetiso"
 # A reduced tetrahedron-sized sphere: 1.8 KB of surface, 3.9 KB of report.
 "$tetiso" extract --lattice 5 --field sphere -o "$work/tiny.ply"
 "$tetiso" reduce "$work/tiny.ply" --phi 0.1 -o "$work/r.ply" --report "$work/r.json" 2>/dev/null
