@@ -57,8 +57,9 @@ for reader in "${readers[@]}"; do
     if [ -d "$regressions" ] && [ -n "$(ls -A "$regressions")" ]; then
         "$binary" "${options[@]}" "$regressions"/* >"$log" 2>&1 || status=$?
     fi
-    seeds=validation/fuzz/corpus/$reader
-    [ "$status" -ne 0 ] || "$binary" "${options[@]}" "${limit[@]}" "$corpus" "$seeds" >>"$log" 2>&1 || status=$?
+    corpora=("$corpus")
+    [ -d "validation/fuzz/corpus/$reader" ] && corpora+=("validation/fuzz/corpus/$reader")
+    [ "$status" -ne 0 ] || "$binary" "${options[@]}" "${limit[@]}" "${corpora[@]}" >>"$log" 2>&1 || status=$?
     runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
     coverage=$(grep -oE 'cov: [0-9]+ ft: [0-9]+' "$log" | tail -1)
     if [ "$status" -eq 0 ]; then
