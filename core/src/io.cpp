@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
-#include <limits>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <random>
 #include <string>
 
@@ -74,7 +74,11 @@ void remove_stale_temporaries(const std::filesystem::path& target) {
     std::error_code ec;
     std::filesystem::directory_iterator entries(directory, ec);
     if (ec) return; // the write itself will say why the directory is unusable
-    for (const std::filesystem::directory_entry& entry : entries) {
+    // Advanced with an error code: a range-for would throw on a directory
+    // that changes or turns unreadable while being listed.
+    for (; entries != std::filesystem::directory_iterator(); entries.increment(ec)) {
+        if (ec) return;
+        const std::filesystem::directory_entry& entry = *entries;
         const std::string name = entry.path().filename().string();
         if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
         // PID.N, both numbers, and no process PID: its writer is gone.
