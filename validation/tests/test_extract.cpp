@@ -194,7 +194,8 @@ TEST(Extract, LevelOutsideTheRangeGivesAnEmptySurface) {
 // OpenMP takes any thread count; libgomp overflowed its stack at 10^5
 // (SIGSEGV) and could not create 5 * 10^4. Above kMaxThreads it is an error.
 TEST(Extract, ThreadCountsAboveTheLimitAreRefused) {
-    const Decomposition one(Lattice(6), 1);
+    const Lattice lattice(6); // Decomposition keeps a reference to it
+    const Decomposition one(lattice, 1);
     const Domain domain = one.make_domain(0, *make_field("sphere"));
     EXPECT_NO_THROW(extract(domain, 2.0f, ExtractOptions{2}));
     for (const int threads : {kMaxThreads + 1, 50000, 100000}) {
