@@ -13,6 +13,7 @@ packages=(
   libcgal-dev libeigen3-dev                          # checker's self-intersections; CGAL's simplifier baseline
   libmeshoptimizer-dev                               # reduction baseline
   tetgen libmetis-dev                                # meshes/make_meshes.sh; splitting them into domains
+  clang                                              # libFuzzer targets of the readers (scripts/fuzz.sh)
 )
 # Optional baselines, built and tested only where installed (their tests are
 # the `reference` label): libvtk9-dev (extraction) and libopenmesh-dev

@@ -4,7 +4,8 @@
 # AddressSanitizer and UndefinedBehaviorSanitizer, where any report fails the
 # test that made it. The optimised build is what users run; the sanitised one
 # catches what does not throw (an out-of-bounds read on a damaged file, a
-# float cast that overflows) but runs too slowly for timing.
+# float cast that overflows) but runs too slowly for timing. Last, each
+# reader's fuzz target runs for 20 s (scripts/fuzz.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install.sh
@@ -16,3 +17,7 @@ cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_
   -DTETISO_SANITIZE=address,undefined,float-cast-overflow -DTETISO_BENCH=OFF -DTETISO_REFERENCE=OFF
 cmake --build build-sanitize -j "$(nproc)"
 ctest --test-dir build-sanitize --output-on-failure -j "$(nproc)" --timeout 1200
+
+# Every reader under libFuzzer for a short fixed time, after replaying the
+# inputs that once failed (the recorded campaign is scripts/fuzz_campaign.sh).
+./scripts/fuzz.sh --seconds 20

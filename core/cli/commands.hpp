@@ -4,12 +4,14 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "tetiso/gpu.hpp"
+#include "tetiso/io.hpp"
 #include "tetiso/reduce.hpp"
 
 namespace tetiso::cli {
@@ -24,6 +26,18 @@ void add_split_command(CLI::App& app, Command& run);
 
 // --phi, shared by every command that reduces.
 void add_phi_option(CLI::App& cmd, double& phi);
+
+// The checks every command applies to the options of the same kind, so that
+// one value is refused, or taken, the same way by each (a NaN passes a
+// "non-negative" test, and CLI11's own messages print ranges of 300 digits).
+// A count of domains: a whole number, at least 1.
+const CLI::Validator& domain_count_check();
+// A distance bound: a finite number, at least 0.
+const CLI::Validator& error_bound_check();
+// --threads: 0 (all cores) to kMaxThreads.
+void add_threads_option(CLI::App& cmd, int& threads, const std::string& description);
+// --level: a finite number that fits a float, the type of field values.
+void add_level_option(CLI::App& cmd, std::optional<double>& level, const std::string& description);
 
 // --device cpu|gpu and --gpu N, shared by the commands that can run on a GPU.
 struct DeviceChoice {
@@ -48,11 +62,19 @@ double mean_edge_length(const Piece& piece);
 nlohmann::json reduce_json(const ReduceReport& report);
 
 // Fails early, before any work, if `path` cannot be created: its directory
-// must exist and be writable, and it must not be a directory.
+// (that of the file a link there names) must exist and be writable, and it
+// must not be a directory, a device, a pipe or a socket.
 void require_writable(const std::filesystem::path& path);
 
-// Writes a JSON report atomically (never a half-written file).
-void write_report(const nlohmann::json& report, const std::filesystem::path& path);
+// Writes a JSON report as one of the command's outputs, which are renamed
+// into place together by output.commit() (never a half-written file, nor a
+// surface without the report asked for).
+void write_report(const nlohmann::json& report, const std::filesystem::path& path, OutputFiles& output);
+
+// The note on stderr that the surface is empty, the same from every command:
+// whether the level lies outside the field's range [lowest, highest] (left
+// out where lowest > highest, a range not known).
+void note_empty_surface(double level, float lowest, float highest);
 
 // Seconds since an arbitrary start, for stage timings.
 double now_seconds();

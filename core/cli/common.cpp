@@ -1,6 +1,12 @@
 // Helpers shared by the subcommands: output checks and reports.
+#include <cerrno>
+#include <charconv>
+#include <cstring>
 #include <chrono>
+#include <cmath>
 #include <fstream>
+#include <iostream>
+#include <limits>
 
 #include <unistd.h>
 
@@ -10,8 +16,76 @@
 
 namespace tetiso::cli {
 
+namespace {
+
+// The value as a double, or nullopt when it is not a number at all.
+std::optional<double> number(const std::string& text) {
+    double value = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (ec == std::errc::result_out_of_range) return text.front() == '-' ? -HUGE_VAL : HUGE_VAL;
+    if (ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
+    return value;
+}
+
+} // namespace
+
+const CLI::Validator& domain_count_check() {
+    static const CLI::Validator check(
+        [](std::string& text) -> std::string {
+            const std::optional<double> value = number(text);
+            if (!value || *value != std::floor(*value)) return "'" + text + "' is not a whole number";
+            if (*value < 1) return "must be at least 1, not " + text;
+            if (*value > std::numeric_limits<int>::max()) return text + " is too many";
+            return {};
+        },
+        "INT >= 1", "domain count");
+    return check;
+}
+
+const CLI::Validator& error_bound_check() {
+    static const CLI::Validator check(
+        [](std::string& text) -> std::string {
+            const std::optional<double> value = number(text);
+            if (!value) return "'" + text + "' is not a number";
+            if (!std::isfinite(*value)) return text + " is not a finite bound (0 means none)";
+            if (*value < 0) return "must be at least 0, not " + text;
+            return {};
+        },
+        "FLOAT >= 0", "error bound");
+    return check;
+}
+
+void add_threads_option(CLI::App& cmd, int& threads, const std::string& description) {
+    static const CLI::Validator check(
+        [](std::string& text) -> std::string {
+            const std::optional<double> value = number(text);
+            if (!value || *value != std::floor(*value)) return "'" + text + "' is not a whole number";
+            if (*value < 0 || *value > kMaxThreads)
+                return text + " is outside 0 (all cores) to " + std::to_string(kMaxThreads);
+            return {};
+        },
+        "0.." + std::to_string(kMaxThreads), "thread count");
+    cmd.add_option("--threads", threads, description)->check(check)->capture_default_str();
+}
+
+void add_level_option(CLI::App& cmd, std::optional<double>& level, const std::string& description) {
+    static const CLI::Validator check(
+        [](std::string& text) -> std::string {
+            const std::optional<double> value = number(text);
+            if (!value) return "'" + text + "' is not a number";
+            if (std::isnan(*value)) return "a level must be a number, not " + text;
+            if (std::abs(*value) > std::numeric_limits<float>::max())
+                return text + " does not fit a float (the field's values are floats, of magnitude at most 3.4e38)";
+            return {};
+        },
+        "FLOAT", "level");
+    cmd.add_option_function<double>(
+           "--level", [&level](double value) { level = value; }, description)
+        ->check(check);
+}
+
 void require_writable(const std::filesystem::path& path) {
-    std::filesystem::path directory = path.parent_path();
+    std::filesystem::path directory = detail::output_target(path).parent_path();
     if (directory.empty()) directory = ".";
     std::error_code ec;
     if (!std::filesystem::is_directory(directory, ec))
@@ -21,13 +95,13 @@ void require_writable(const std::filesystem::path& path) {
     if (std::filesystem::is_directory(path, ec)) throw Error(path.string() + ": cannot write: it is a directory");
 }
 
-void write_report(const nlohmann::json& report, const std::filesystem::path& path) {
-    write_atomically(path, [&](const std::filesystem::path& temporary) {
+void write_report(const nlohmann::json& report, const std::filesystem::path& path, OutputFiles& output) {
+    output.add(path, [&](const std::filesystem::path& temporary) {
         std::ofstream file(temporary, std::ios::trunc);
-        if (!file) throw Error(path.string() + ": cannot open for writing");
+        if (!file) throw Error(path.string() + ": cannot open for writing: " + std::strerror(errno));
         file << report.dump(2) << '\n';
         file.close();
-        if (!file) throw Error(path.string() + ": write failed");
+        if (!file) throw Error(path.string() + ": cannot write: " + std::strerror(errno));
     });
 }
 
@@ -59,6 +133,14 @@ nlohmann::json device_json(const Gpu* gpu, const GpuTimings& seconds) {
               {"download", seconds.download},
               {"extract", seconds.extract},
               {"reduce", seconds.reduce}}}};
+}
+
+void note_empty_surface(double level, float lowest, float highest) {
+    std::cerr << "tetiso: the surface is empty: level " << level;
+    if (lowest <= highest)
+        std::cerr << (level < lowest || level > highest ? " is outside" : " is within") << " the field's range ["
+                  << lowest << ", " << highest << "]";
+    std::cerr << '\n';
 }
 
 double now_seconds() {

@@ -78,12 +78,6 @@ private:
     GpuTimings totals_;
 };
 
-void report_empty(double level, float lowest, float highest) {
-    std::cerr << "tetiso: the surface is empty: level " << level
-              << (level < lowest || level > highest ? " is outside" : " is within") << " the field's range ["
-              << lowest << ", " << highest << "]\n";
-}
-
 void run_extract_mesh(const ExtractArguments& args, const Field& field, double start) {
     Extractor extractor(args);
     const double t0 = now_seconds();
@@ -94,7 +88,7 @@ void run_extract_mesh(const ExtractArguments& args, const Field& field, double s
     Piece surface = extractor(domain, static_cast<float>(level));
     const double t2 = now_seconds();
     const auto [lo, hi] = std::minmax_element(domain.f.begin(), domain.f.end());
-    if (surface.triangle_count() == 0 && lo != domain.f.end()) report_empty(level, *lo, *hi);
+    if (surface.triangle_count() == 0 && lo != domain.f.end()) note_empty_surface(level, *lo, *hi);
     ReduceReport reduce_report;
     const double spacing = mean_edge_length(domain);
     if (args.reduce) {
@@ -104,8 +98,9 @@ void run_extract_mesh(const ExtractArguments& args, const Field& field, double s
         surface = extractor.reduce(surface, options, reduce_report);
     }
     const double t3 = now_seconds();
-    write_piece(surface, args.output);
-    if (args.report.empty()) return;
+    OutputFiles output;
+    write_piece(surface, args.output, output);
+    if (args.report.empty()) return output.commit();
     nlohmann::json report = {
         {"command", "extract"},
         {"mesh", args.mesh.string()},
@@ -133,7 +128,8 @@ void run_extract_mesh(const ExtractArguments& args, const Field& field, double s
         report["phi"] = args.reduce_options.phi;
         report["max_error"] = args.max_error_spacings * spacing;
     }
-    write_report(report, args.report);
+    write_report(report, args.report, output);
+    output.commit();
 }
 
 void run_extract(const ExtractArguments& args) {
@@ -189,7 +185,7 @@ void run_extract(const ExtractArguments& args) {
             lowest = std::min(lowest, *lo);
             highest = std::max(highest, *hi);
         }
-    if (surface.triangle_count() == 0) report_empty(level, lowest, highest);
+    if (surface.triangle_count() == 0) note_empty_surface(level, lowest, highest);
     ReduceReport reduce_report;
     if (args.reduce) {
         ReduceOptions options = args.reduce_options;
@@ -198,7 +194,8 @@ void run_extract(const ExtractArguments& args) {
         surface = extractor.reduce(surface, options, reduce_report);
     }
     const double t_write = now_seconds();
-    write_piece(surface, args.output);
+    OutputFiles output;
+    write_piece(surface, args.output, output);
     const double write_seconds = now_seconds() - t_write;
 
     if (!args.report.empty()) {
@@ -229,8 +226,9 @@ void run_extract(const ExtractArguments& args) {
             report["phi"] = args.reduce_options.phi;
             report["max_error"] = args.max_error_spacings * lattice.spacing();
         }
-        write_report(report, args.report);
+        write_report(report, args.report, output);
     }
+    output.commit();
 }
 
 } // namespace
@@ -247,22 +245,18 @@ void add_extract_command(CLI::App& app, Command& run) {
         "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_option("--domains", args->domains, "Number of domains (recursive coordinate bisection)")
-        ->check(CLI::PositiveNumber);
+        ->check(domain_count_check());
     cmd->add_option("--field", args->field,
                     std::string("Built-in field (") + builtin_field_names() + ") or an expression in x, y, z")
         ->capture_default_str();
-    cmd->add_option_function<double>(
-        "--level", [args](double level) { args->level = level; },
-        "Isosurface level (default: the field's own, 0.5 for paper)");
-    cmd->add_option("--threads", args->threads, "Threads inside a domain (0 = all cores); output does not depend on it")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+    add_level_option(*cmd, args->level, "Isosurface level (default: the field's own, 0.5 for paper)");
+    add_threads_option(*cmd, args->threads, "Threads inside a domain (0 = all cores); output does not depend on it");
     add_device_options(*cmd, args->device, "the marching tetrahedra and the reduction");
     cmd->add_flag("--reduce", args->reduce, "Reduce the combined surface (parallel edge collapse and flip)");
     add_phi_option(*cmd, args->reduce_options.phi);
     cmd->add_option("--max-error", args->max_error_spacings,
                     "With --reduce: bound on the distance to the raw surface, in lattice spacings (mean tetrahedron edge lengths with --mesh; 0: none)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(error_bound_check())
         ->capture_default_str();
     cmd->add_option("-o,--output", args->output, "Output surface, .ply or .vtp")->required();
     cmd->add_option("--report", args->report, "Write a JSON report here");

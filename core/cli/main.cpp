@@ -1,8 +1,10 @@
 // The `tetiso` command: argument parsing and error reporting only; every
 // stage lives in the library. Any error is one line on stderr and exit 2.
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <string>
 
 #include "commands.hpp"
 #include "tetiso/error.hpp"
@@ -16,9 +18,39 @@ bool is_secondary_rank() {
         if (const char* value = std::getenv(variable)) return std::atoi(value) != 0;
     return false;
 }
+
+// A message on one line whatever it quotes: a newline, a carriage return or
+// another control byte from a file (a VTP attribute, a table field) or an
+// argument is written as an escape, \n or \xHH, never as itself.
+std::string one_line(const std::string& message) {
+    std::string out;
+    out.reserve(message.size());
+    for (const char c : message) {
+        const auto byte = static_cast<unsigned char>(c);
+        if (c == '\n') {
+            out += "\\n";
+        } else if (c == '\r') {
+            out += "\\r";
+        } else if (c == '\t') {
+            out += "\\t";
+        } else if (byte < 0x20 || byte == 0x7f) {
+            static const char hex[] = "0123456789abcdef";
+            out += "\\x";
+            out += hex[byte >> 4];
+            out += hex[byte & 15];
+        } else {
+            out += c;
+        }
+    }
+    return out;
+}
 } // namespace
 
 int main(int argc, char** argv) {
+    // A file-size limit (ulimit -f) then fails the write with EFBIG, which
+    // the writer reports and cleans up after, instead of killing the process
+    // with SIGXFSZ and leaving its temporary file behind.
+    std::signal(SIGXFSZ, SIG_IGN);
     CLI::App app{"tetiso: reduced isosurfaces of large tetrahedral meshes, in parallel"};
     app.require_subcommand(1);
     app.set_version_flag("--version", "tetiso 0.1.0");
@@ -37,7 +69,7 @@ int main(int argc, char** argv) {
     } catch (const CLI::CallForVersion& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        if (!is_secondary_rank()) std::cerr << "tetiso: " << e.what() << " (see tetiso --help)\n";
+        if (!is_secondary_rank()) std::cerr << "tetiso: " << one_line(e.what()) << " (see tetiso --help)\n";
         return 2;
     }
     try {
@@ -48,13 +80,13 @@ int main(int argc, char** argv) {
         // rank 0 before it could say which task failed, and why.
         return 0;
     } catch (const tetiso::Error& e) {
-        if (!is_secondary_rank()) std::cerr << "tetiso: " << e.what() << '\n';
+        if (!is_secondary_rank()) std::cerr << "tetiso: " << one_line(e.what()) << '\n';
         return 2;
     } catch (const std::bad_alloc&) {
         std::cerr << "tetiso: out of memory\n";
         return 2;
     } catch (const std::exception& e) {
-        std::cerr << "tetiso: internal error: " << e.what() << '\n';
+        std::cerr << "tetiso: internal error: " << one_line(e.what()) << '\n';
         return 3;
     }
     return 0;

@@ -87,7 +87,8 @@ void run_reduce(const ReduceArguments& args) {
     }
     ReduceReport report;
     const Piece output = gpu ? gpu->reduce(input, options, &report) : reduce(input, options, &report);
-    write_piece(output, args.output);
+    OutputFiles files;
+    write_piece(output, args.output, files);
     if (!args.report.empty()) {
         nlohmann::json json = reduce_json(report);
         json["command"] = "reduce";
@@ -98,8 +99,9 @@ void run_reduce(const ReduceArguments& args) {
         json["threads"] = options.threads;
         json["device"] = device_json(gpu.get(), gpu ? gpu->last_timings() : GpuTimings{});
         json["total_seconds"] = now_seconds() - start;
-        write_report(json, args.report);
+        write_report(json, args.report, files);
     }
+    files.commit();
 }
 
 } // namespace
@@ -115,10 +117,8 @@ void add_reduce_command(CLI::App& app, Command& run) {
            "Bound on the distance to the input surface, absolute (0: none; default: 0.4 x mean edge length); "
            "for an input that carries tetiso_error_bound (a reduction's output), on the distance to the raw surface it "
            "stands for")
-        ->check(CLI::NonNegativeNumber);
-    cmd->add_option("--threads", args->options.threads, "Threads (0 = all cores); output does not depend on it")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+        ->check(error_bound_check());
+    add_threads_option(*cmd, args->options.threads, "Threads (0 = all cores); output does not depend on it");
     add_device_options(*cmd, args->device, "the rounds");
     cmd->add_option("--report", args->report, "Write a JSON report here");
     cmd->callback([&run, args] { run = [args] { run_reduce(*args); }; });

@@ -3,7 +3,9 @@
 #include <malloc.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <iostream>
+#include <limits>
 
 #include "commands.hpp"
 #include "tetiso/error.hpp"
@@ -77,6 +79,10 @@ void run_job(const RunArguments& args) {
         built = std::make_unique<Job>(args.job);
     } catch (const Error& e) {
         setup_problem = e.what();
+    } catch (const std::bad_alloc&) {
+        // Left to propagate, it would finalise MPI on this rank alone while
+        // the others wait below for its answer.
+        setup_problem = "out of memory while setting up the job";
     }
     if (!mpi.all(setup_problem.empty())) {
         if (!setup_problem.empty()) throw Error(setup_problem);
@@ -110,11 +116,20 @@ void run_job(const RunArguments& args) {
     };
     std::optional<JobResult> result = mpi.size() > 1 ? run_mpi(job, progress) : run_local(job, progress);
     if (!result) return; // a worker
+    if (result->surface.triangle_count() == 0) {
+        float lowest = std::numeric_limits<float>::infinity(), highest = -lowest;
+        for (const TaskRecord& t : result->tasks) {
+            lowest = std::min(lowest, t.field_low);
+            highest = std::max(highest, t.field_high);
+        }
+        note_empty_surface(job.level(), lowest, highest);
+    }
 
     const double t_write = now_seconds();
-    write_piece(result->surface, args.output);
+    OutputFiles output;
+    write_piece(result->surface, args.output, output);
     const double write_seconds = now_seconds() - t_write;
-    if (args.report.empty()) return;
+    if (args.report.empty()) return output.commit();
 
     std::uint64_t raw = 0;
     nlohmann::json tasks = nlohmann::json::array();
@@ -152,7 +167,8 @@ void run_job(const RunArguments& args) {
         {"seconds", {{"job", result->seconds}, {"write", write_seconds}, {"total", now_seconds() - start}}},
         {"tasks", tasks},
     };
-    write_report(report, args.report);
+    write_report(report, args.report, output);
+    output.commit();
 }
 
 } // namespace
@@ -179,7 +195,7 @@ void add_run_command(CLI::App& app, Command& run) {
     CLI::Option* domains = cmd->add_option("--domains", job.domains,
                                            "Number of domains (the lattice: recursive coordinate bisection; a mesh "
                                            "without --partition: METIS; with it, its domain count if given)")
-                               ->check(CLI::PositiveNumber);
+                               ->check(domain_count_check());
     cmd->add_option("--field", job.field,
                     std::string("Built-in field (") + builtin_field_names() + ") or an expression in x, y, z")
         ->capture_default_str()
@@ -188,14 +204,12 @@ void add_run_command(CLI::App& app, Command& run) {
            "--attribute", [args](int k) { args->job.attribute = k; },
            "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
         ->needs(mesh);
-    cmd->add_option_function<double>(
-        "--level", [args](double level) { args->job.level = level; },
-        "Isosurface level (default: the field's own, 0.5 for paper; 0 for --attribute)");
+    add_level_option(*cmd, job.level, "Isosurface level (default: the field's own, 0.5 for paper; 0 for --attribute)");
     add_phi_option(*cmd, job.reduce_options.phi);
     cmd->add_option("--max-error", job.max_error_spacings,
                     "Bound on the distance to the raw surface, in spacings: the lattice's, or a mesh's mean "
                     "edge length (0: none)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(error_bound_check())
         ->capture_default_str();
     cmd->add_option("--seam-rings", job.seam_rings,
                     "How far from a seam its reduction reaches, in edges (the rest of the pieces is left as it is)")
@@ -207,9 +221,7 @@ void add_run_command(CLI::App& app, Command& run) {
         ->check(CLI::Range(-1, 64))
         ->capture_default_str();
     cmd->add_flag("!--no-reduce", job.reduce, "Extract and seam only");
-    cmd->add_option("--threads", job.threads, "Threads inside each task (0 = all cores)")
-        ->check(CLI::NonNegativeNumber)
-        ->capture_default_str();
+    add_threads_option(*cmd, job.threads, "Threads inside each task (0 = all cores)");
     cmd->add_option("-o,--output", args->output, "Output surface, .ply or .vtp")->required();
     cmd->add_option("--report", args->report, "Write a JSON report (totals and one record per task) here");
     cmd->add_flag("--quiet", args->quiet, "No progress lines on stderr");

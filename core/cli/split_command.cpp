@@ -47,7 +47,7 @@ void add_split_command(CLI::App& app, Command& run) {
                         "writes BASE.epart.D; default: METIS splits the mesh into --domains)");
     CLI::Option* domains =
         cmd->add_option("--domains", args->domains, "Number of domains (with --partition: its count, if given)")
-            ->check(CLI::PositiveNumber);
+            ->check(domain_count_check());
     cmd->add_option("--field", args->field,
                     std::string("Built-in field (") + builtin_field_names() +
                         ") or an expression in x, y, z, evaluated at the nodes and stored")

@@ -5,6 +5,7 @@
 // No count in the header is trusted before the file is known to hold it.
 #include <algorithm>
 #include <bit>
+#include <cerrno>
 #include <charconv>
 #include <cstring>
 #include <fstream>
@@ -336,7 +337,7 @@ private:
 void write_ply(const Piece& piece, const std::filesystem::path& path) {
     const bool bounds = !piece.error.empty();
     std::ofstream file(path, std::ios::binary | std::ios::trunc);
-    if (!file) throw Error(path.string() + ": cannot open for writing");
+    if (!file) throw Error(path.string() + ": cannot open for writing: " + std::strerror(errno));
     file << "ply\nformat binary_little_endian 1.0\ncomment written by tetiso\n"
          << "element vertex " << piece.vertex_count() << "\n"
          << "property float x\nproperty float y\nproperty float z\n"
@@ -383,7 +384,7 @@ void write_ply(const Piece& piece, const std::filesystem::path& path) {
     }
     file.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
     file.close();
-    if (!file) throw Error(path.string() + ": write failed (disk full?)");
+    if (!file) throw Error(path.string() + ": cannot write: " + std::strerror(errno));
 }
 
 Piece read_ply(const std::filesystem::path& path) { return Reader(path).read(); }

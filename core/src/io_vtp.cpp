@@ -3,6 +3,7 @@
 // write and read, and still a standard VTK file. The reader accepts that form
 // with any of VTK's header and index widths; other encodings get a clear
 // error rather than a guess.
+#include <cerrno>
 #include <charconv>
 #include <cstring>
 #include <fstream>
@@ -48,7 +49,7 @@ Attributes parse_attributes(const std::string& tag) {
 
 void write_vtp(const Piece& piece, const std::filesystem::path& path) {
     std::ofstream file(path, std::ios::binary | std::ios::trunc);
-    if (!file) throw Error(path.string() + ": cannot open for writing");
+    if (!file) throw Error(path.string() + ": cannot open for writing: " + std::strerror(errno));
     const std::size_t n = piece.vertex_count(), m = piece.triangle_count();
 
     std::vector<float> points(3 * n);
@@ -111,7 +112,7 @@ void write_vtp(const Piece& piece, const std::filesystem::path& path) {
     }
     file << "\n  </AppendedData>\n</VTKFile>\n";
     file.close();
-    if (!file) throw Error(path.string() + ": write failed (disk full?)");
+    if (!file) throw Error(path.string() + ": cannot write: " + std::strerror(errno));
 }
 
 Piece read_vtp(const std::filesystem::path& path) {

@@ -159,6 +159,10 @@ std::vector<std::int32_t> read_partition(const std::filesystem::path& file, std:
         const auto id = table.get<std::int64_t>(0, "domain id");
         if (id < 0 || id > std::numeric_limits<std::int32_t>::max())
             table.fail("domain id " + std::to_string(id) + " is outside [0, 2^31)");
+        // Every domain holds a tetrahedron, so no id reaches the count.
+        if (static_cast<std::uint64_t>(id) >= tet_count)
+            table.fail("domain id " + std::to_string(id) + " for a mesh of " + std::to_string(tet_count) +
+                       " tetrahedra: ids run from 0 without gaps, each domain holding one or more");
         if (part.size() == tet_count)
             table.fail("more domain ids than the mesh's " + std::to_string(tet_count) + " tetrahedra");
         part.push_back(static_cast<std::int32_t>(id));
@@ -228,6 +232,11 @@ MeshPartition::MeshPartition(Domain mesh, const std::vector<std::int32_t>& part,
         if (mesh_.gid[v] != static_cast<GlobalId>(v)) throw Error(source_ + ": the mesh's global ids are not its node numbers");
     const auto [low, high] = std::minmax_element(part.begin(), part.end());
     if (*low < 0) throw Error(source_ + ": negative domain id " + std::to_string(*low));
+    // Checked before a counter per id is allocated: ids run without gaps, so
+    // the largest is below the tetrahedron count.
+    if (static_cast<std::size_t>(*high) >= tets)
+        throw Error(source_ + ": domain id " + std::to_string(*high) + " for " + std::to_string(tets) +
+                    " tetrahedra (ids must run from 0 without gaps)");
     const int parts = *high + 1;
     std::vector<std::int64_t> part_tets(static_cast<std::size_t>(parts), 0);
     for (const std::int32_t p : part) ++part_tets[static_cast<std::size_t>(p)];

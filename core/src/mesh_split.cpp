@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -46,7 +47,7 @@ public:
     template <class T>
     void put_array(const std::vector<T>& values) {
         put(static_cast<std::uint64_t>(values.size()));
-        bytes_.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+        if (!values.empty()) bytes_.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
     }
     void put_string(const std::string& text) {
         put(static_cast<std::uint64_t>(text.size()));
@@ -59,7 +60,7 @@ public:
         std::ofstream out(path, std::ios::binary | std::ios::trunc);
         out.write(bytes_.data(), static_cast<std::streamsize>(bytes_.size()));
         out.close();
-        if (!out) throw Error(path.string() + ": cannot write");
+        if (!out) throw Error(path.string() + ": cannot write: " + std::strerror(errno));
         return digest;
     }
 
@@ -101,7 +102,9 @@ public:
         const auto count = get<std::uint64_t>();
         if (count > (end_ - at_) / sizeof(T)) fail(std::string("truncated in ") + name);
         std::vector<T> values(static_cast<std::size_t>(count));
-        std::memcpy(values.data(), bytes_.data() + at_, values.size() * sizeof(T));
+        // An empty array (a one-domain split shares no edges) has no data()
+        // to copy into: memcpy must not be given null, even for 0 bytes.
+        if (count > 0) std::memcpy(values.data(), bytes_.data() + at_, values.size() * sizeof(T));
         at_ += values.size() * sizeof(T);
         return values;
     }
@@ -253,7 +256,10 @@ SplitMeshPartition::SplitMeshPartition(std::filesystem::path dir) : dir_(std::mo
         bool ok = range_ok && (leaf ? n.count == 1 : child(n.left) && child(n.right));
         if (ok && !leaf) {
             const DomainTreeNode &l = tree_[static_cast<std::size_t>(n.left)], &r = tree_[static_cast<std::size_t>(n.right)];
-            ok = l.first == n.first && r.first == l.first + l.count && l.count + r.count == n.count;
+            // The children are checked in their own turn, later: their sums
+            // here may not fit an int.
+            ok = l.first == n.first && std::int64_t{r.first} == std::int64_t{l.first} + l.count &&
+                 std::int64_t{l.count} + r.count == n.count;
         }
         if (!ok) in.fail("merge tree node " + std::to_string(i) + " is malformed");
     }

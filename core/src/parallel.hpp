@@ -7,10 +7,12 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "hd.hpp"
 #include "tetiso/error.hpp"
+#include "tetiso/mesh.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -21,8 +23,11 @@ namespace tetiso::parallel {
 using i32 = std::int32_t;
 using i64 = std::int64_t;
 
-// threads <= 0: OpenMP's default (all cores), or 1 without OpenMP.
+// threads <= 0: OpenMP's default (all cores), or 1 without OpenMP. Throws
+// tetiso::Error above kMaxThreads.
 inline int resolve_threads(int threads) {
+    if (threads > kMaxThreads)
+        throw Error(std::to_string(threads) + " threads: at most " + std::to_string(kMaxThreads) + " are allowed");
 #ifdef _OPENMP
     if (threads <= 0) return omp_get_max_threads();
 #endif

@@ -2,9 +2,11 @@
 // scheduling"), shared by the single-process and the MPI runs.
 #include "tetiso/schedule.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
@@ -91,6 +93,11 @@ std::unique_ptr<Partition> make_partition(const JobConfig& config, std::unique_p
 } // namespace
 
 Job::Job(const JobConfig& config) : config_(config) {
+    if (config.threads < 0 || config.threads > kMaxThreads)
+        throw Error(std::to_string(config.threads) + " threads per task: give 0 (all cores) to " +
+                    std::to_string(kMaxThreads));
+    if (!std::isfinite(config.max_error_spacings) || config.max_error_spacings < 0)
+        throw Error("error bound " + std::to_string(config.max_error_spacings) + " is not a finite number >= 0");
     std::unique_ptr<Field> field = make_field(config.field);
     // An attribute has no level of its own; an analytic field does, and a
     // split mesh keeps the one it was written with.
@@ -99,6 +106,8 @@ Job::Job(const JobConfig& config) : config_(config) {
     if (const auto* split = dynamic_cast<const SplitMeshPartition*>(partition_.get())) default_level = split->default_level();
     const double level = config.level.value_or(default_level);
     if (!std::isfinite(level)) throw Error("isosurface level is not a finite number");
+    if (std::abs(level) > std::numeric_limits<float>::max())
+        throw Error("isosurface level " + std::to_string(level) + " does not fit a float, the type of field values");
     level_ = static_cast<float>(level);
     tree_ = task_tree(partition_->tree());
     reduce_options_ = config.reduce_options;
@@ -192,6 +201,11 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
         {
             const Domain domain = partition_->make_domain(n.first);
             record.stages.generate = lap();
+            if (!domain.f.empty()) {
+                const auto [low, high] = std::minmax_element(domain.f.begin(), domain.f.end());
+                record.field_low = *low;
+                record.field_high = *high;
+            }
             piece = extract(domain, level_, ExtractOptions{threads.count});
         } // the tetrahedra go before the reduction needs its memory
         record.stages.extract = lap();

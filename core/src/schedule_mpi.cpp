@@ -18,8 +18,13 @@
 #include <mpi.h>
 #include <sched.h>
 
+#include <signal.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <deque>
 #include <map>
@@ -222,7 +227,7 @@ public:
         }
         if (taken == 0 || !known_) return 0;
         lends_ += taken;
-        const int threads = per_worker_ * (1 + lends_);
+        const int threads = std::min(per_worker_ * (1 + lends_), kMaxThreads);
         most_ = std::max(most_, threads);
         run_on(cores_, threads);
         return threads;
@@ -292,6 +297,8 @@ void work(const Job& job) {
             out.put(record.triangles_out);
             out.put(record.samples_out);
             out.put(record.stages);
+            out.put(record.field_low);
+            out.put(record.field_high);
             out.reserve(Packer::piece_size(piece));
             out.put_piece(piece);
             send(out.bytes, 0, kResult);
@@ -307,7 +314,74 @@ void work(const Job& job) {
     }
 }
 
+// What rank 0 says when the job is stopped from outside. A worker killed by
+// SIGKILL (by hand, or by the kernel out of memory) says nothing, and the
+// launcher names only its rank and the signal before it sends SIGTERM to
+// every other rank: rank 0, which knows which task each rank held, says so
+// on its way out. The line is rebuilt whenever a task starts or ends and
+// written from the signal handler with write(2), which is all a handler may
+// use: two buffers, the one in use switched atomically.
+class TasksInFlight {
+public:
+    TasksInFlight() {
+        set("no task had started");
+        struct sigaction action {};
+        action.sa_handler = &TasksInFlight::on_signal;
+        sigemptyset(&action.sa_mask);
+        for (const int signal : kSignals) sigaction(signal, &action, &previous_[index_of(signal)]);
+    }
+    ~TasksInFlight() {
+        for (const int signal : kSignals) sigaction(signal, &previous_[index_of(signal)], nullptr);
+    }
+    TasksInFlight(const TasksInFlight&) = delete;
+    TasksInFlight& operator=(const TasksInFlight&) = delete;
+
+    // running: rank -> the task it holds, of `ranks` ranks.
+    void update(const Job& job, const std::map<int, int>& running, int ranks) {
+        std::string held;
+        for (int rank = 0; rank < ranks; ++rank) {
+            const auto it = running.find(rank);
+            if (rank == 0 && it == running.end()) continue; // rank 0 is the one speaking
+            held += std::string(held.empty() ? "" : ", ") + "rank " + std::to_string(rank) +
+                    (it == running.end() ? " held no task" : " held task '" + job.describe(it->second) + "'");
+        }
+        set(held);
+    }
+
+private:
+    static constexpr int kSignals[] = {SIGTERM, SIGINT, SIGHUP};
+    static constexpr std::size_t kLength = 4096;
+    static std::size_t index_of(int signal) {
+        return static_cast<std::size_t>(std::find(std::begin(kSignals), std::end(kSignals), signal) - std::begin(kSignals));
+    }
+
+    void set(const std::string& held) {
+        const std::string line = "tetiso: the job was stopped from outside (a rank was killed or ran out of memory, "
+                                 "or the launcher was interrupted) while " + held + "\n";
+        const int next = 1 - current_.load();
+        const std::size_t n = std::min(line.size(), kLength);
+        std::memcpy(lines_[next], line.data(), n);
+        if (n == kLength) lines_[next][kLength - 1] = '\n';
+        lengths_[next] = n;
+        current_.store(next);
+    }
+
+    static void on_signal(int signal) {
+        const int at = current_.load();
+        const ssize_t written = ::write(STDERR_FILENO, lines_[at], lengths_[at]);
+        (void)written;
+        ::signal(signal, SIG_DFL);
+        ::raise(signal);
+    }
+
+    static inline char lines_[2][kLength];
+    static inline std::size_t lengths_[2];
+    static inline std::atomic<int> current_{0};
+    struct sigaction previous_[std::size(kSignals)];
+};
+
 JobResult control(const Job& job, int ranks, const Progress& progress) {
+    TasksInFlight in_flight;
     using clock = std::chrono::steady_clock;
     const auto start = clock::now();
     auto seconds = [&] { return std::chrono::duration<double>(clock::now() - start).count(); };
@@ -357,12 +431,13 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
         record.start = seconds();
         int threads = job.config().threads;
         if (own_cores_known) {
-            threads = std::max(1, threads) * ranks;
+            threads = std::min(std::max(1, threads) * ranks, kMaxThreads);
             run_on(job_cores, threads);
         }
         auto back_home = [&] {
             if (own_cores_known) run_on(own_cores, std::max(1, job.config().threads));
         };
+        in_flight.update(job, {{0, task}}, ranks);
         try {
             pieces[static_cast<std::size_t>(task)] =
                 job.execute(task, &*pieces[static_cast<std::size_t>(n.left)],
@@ -373,6 +448,7 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
             return;
         }
         back_home();
+        in_flight.update(job, running, ranks);
         pieces[static_cast<std::size_t>(n.left)].reset();
         pieces[static_cast<std::size_t>(n.right)].reset();
         record.rank = 0;
@@ -444,6 +520,7 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
         }
         send(out.bytes, worker, kTask);
         running[worker] = task;
+        in_flight.update(job, running, ranks);
         dispatched_at[worker] = seconds();
     };
 
@@ -474,6 +551,8 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
             record.triangles_out = in.get<std::uint64_t>();
             record.samples_out = in.get<std::uint64_t>();
             record.stages = in.get<TaskRecord::Stages>();
+            record.field_low = in.get<float>();
+            record.field_high = in.get<float>();
             const TaskNode& n = job.node(record.task);
             record.kind = job.kind(record.task);
             record.first_domain = n.first;
@@ -485,6 +564,7 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
             pieces[static_cast<std::size_t>(record.task)] = in.get_piece();
             result.tasks.push_back(record);
             running.erase(worker);
+            in_flight.update(job, running, ranks);
             end_lends_to(worker);
             queue.complete(record.task);
             if (progress) progress(++done, job.task_count(), seconds());
@@ -493,6 +573,7 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
             const int task = in.get<std::int32_t>();
             fail(task, worker, in.get_string());
             running.erase(worker);
+            in_flight.update(job, running, ranks);
             end_lends_to(worker);
         }
         idle.push_back(worker);
@@ -524,6 +605,28 @@ MpiSession::MpiSession() {
     active_ = true;
     MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
     MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    // MPI_Init returns on a rank whose transport failed (Open MPI warns that
+    // an mmap of its shared memory failed, and goes on); its messages then
+    // never arrive and every rank waits in the first collective. A barrier
+    // right after start-up, before any rank does work of its own, completes
+    // within moments when all is well; one that does not is that failure.
+    MPI_Request started;
+    MPI_Ibarrier(MPI_COMM_WORLD, &started);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(kMpiStartSeconds);
+    for (int done = 0;;) {
+        MPI_Test(&started, &done, MPI_STATUS_IGNORE);
+        if (done) break;
+        if (std::chrono::steady_clock::now() > deadline) {
+            if (rank_ == 0)
+                std::fprintf(stderr,
+                             "tetiso: the %d MPI ranks could not all reach each other within %d s of start-up "
+                             "(a rank's MPI transport failed to start: see the launcher's messages); the job is "
+                             "stopped\n",
+                             size_, kMpiStartSeconds);
+            MPI_Abort(MPI_COMM_WORLD, 2);
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
 }
 
 MpiSession::~MpiSession() {

@@ -3,6 +3,7 @@
 #include "tetiso/seam.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <chrono>
 #include <numeric>
@@ -114,7 +115,38 @@ Piece merge_all(std::vector<Piece> pieces) {
         if (pieces.size() % 2 == 1) next.push_back(std::move(pieces.back()));
         pieces = std::move(next);
     }
+    order_triangles(pieces.front());
     return std::move(pieces.front());
+}
+
+void order_triangles(Piece& piece) {
+    const std::size_t m = piece.triangle_count();
+    std::vector<std::array<std::int32_t, 3>> corners(m);
+    for (std::size_t t = 0; t < m; ++t) {
+        auto& c = corners[t];
+        std::copy_n(piece.triangles.begin() + static_cast<std::ptrdiff_t>(3 * t), 3, c.begin());
+        std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+    }
+    std::vector<std::int32_t> order(m);
+    std::iota(order.begin(), order.end(), 0);
+    // Stable: a triangle given twice keeps its copies' order (and bounds).
+    std::stable_sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) {
+        return corners[static_cast<std::size_t>(a)] < corners[static_cast<std::size_t>(b)];
+    });
+    std::vector<std::int32_t> position(m);
+    for (std::size_t t = 0; t < m; ++t) {
+        const auto from = static_cast<std::size_t>(order[t]);
+        std::copy(corners[from].begin(), corners[from].end(), piece.triangles.begin() + static_cast<std::ptrdiff_t>(3 * t));
+        position[from] = static_cast<std::int32_t>(t);
+    }
+    const auto permute = [&](auto& values) {
+        if (values.size() != m) return;
+        auto copy = values;
+        for (std::size_t t = 0; t < m; ++t) values[t] = copy[static_cast<std::size_t>(order[t])];
+    };
+    permute(piece.error);
+    permute(piece.sampled);
+    for (std::int32_t& t : piece.sample_triangle) t = position[static_cast<std::size_t>(t)];
 }
 
 std::size_t unlock_settled(Piece& piece, const EdgeDomains& domains_of_edge) {

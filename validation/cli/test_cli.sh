@@ -42,6 +42,41 @@ expect 2 "expression with an unknown variable" -- "$tetiso" extract --lattice 10
 expect 2 "N < 2" -- "$tetiso" extract --lattice 1 -o "$out/s.ply"
 expect 2 "D < 1" -- "$tetiso" extract --lattice 10 --domains 0 -o "$out/s.ply"
 expect 2 "more domains than cells" -- "$tetiso" extract --lattice 3 --domains 9 -o "$out/s.ply"
+ # Every command takes the same range of thread counts; far above it libgomp
+# overflowed its stack (SIGSEGV, nothing said) or could not create them.
+for command in "extract --lattice 20" "run --lattice 20 --domains 2 --quiet"; do
+    for threads in 100000 50000 -1 1.5; do
+        # shellcheck disable=SC2086 # the command is several arguments
+        expect 2 "$command --threads $threads" -- "$tetiso" $command --threads "$threads" -o "$out/s.ply"
+    done
+done
+"$tetiso" extract --lattice 12 --field sphere -o "$work/small.ply"
+expect 2 "reduce --threads 100000" -- "$tetiso" reduce "$work/small.ply" --threads 100000 -o "$out/r.ply"
+grep -q -- "--threads: 100000 is outside 0 (all cores) to 1024" "$work/stderr" && passed=$((passed + 1)) ||
+    { echo "FAIL: a thread count's error does not give the range: $(cat "$work/stderr")"; failures=$((failures + 1)); }
+# One check per kind of option, the same in every command: a NaN bound is no
+# bound at all (run took it as "none"), a level must fit a float (and be
+# called finite when it is), a domain count says so without a 300-digit range.
+for bound in nan inf -inf -1; do
+    expect 2 "extract --max-error $bound" -- "$tetiso" extract --lattice 10 --reduce --max-error "$bound" -o "$out/s.ply"
+    expect 2 "run --max-error $bound" -- "$tetiso" run --lattice 10 --domains 2 --max-error "$bound" -o "$out/s.ply"
+    expect 2 "reduce --max-error $bound" -- "$tetiso" reduce "$work/small.ply" --max-error "$bound" -o "$out/r.ply"
+done
+for command in "extract --lattice 10" "run --lattice 10 --domains 2"; do
+    # shellcheck disable=SC2086
+    expect 2 "$command --level 1e39" -- "$tetiso" $command --level 1e39 -o "$out/s.ply"
+    grep -q "1e39 does not fit a float" "$work/stderr" && passed=$((passed + 1)) ||
+        { echo "FAIL: $command: a level too large for a float: $(cat "$work/stderr")"; failures=$((failures + 1)); }
+    # shellcheck disable=SC2086
+    expect 2 "$command --level nan" -- "$tetiso" $command --level nan -o "$out/s.ply"
+done
+for command in "extract --lattice 10" "run --lattice 10" "split --mesh meshes/cube.1"; do
+    # shellcheck disable=SC2086
+    expect 2 "$command --domains 0" -- "$tetiso" $command --domains 0 -o "$out/s.ply"
+    grep -q -- "--domains: must be at least 1, not 0" "$work/stderr" && [ "$(wc -c <"$work/stderr")" -lt 100 ] &&
+        passed=$((passed + 1)) ||
+        { echo "FAIL: $command: --domains 0's error: $(cat "$work/stderr")"; failures=$((failures + 1)); }
+done
 expect 2 "unwritable output directory" -- "$tetiso" extract --lattice 10 -o "$out/missing/s.ply"
 expect 2 "unknown output format" -- "$tetiso" extract --lattice 10 -o "$out/s.stl"
 expect 2 "check of a missing file" -- "$tetiso" check "$out/nothing.ply"
@@ -104,6 +139,10 @@ if [ $? -eq 0 ] && cmp -s "$work/split3.ply" "$work/mesh3.ply"; then
 else
     echo "FAIL: the job over a split differs from the job over the mesh"; failures=$((failures + 1))
 fi
+# A split into one domain has no shared edges, empty arrays in its files.
+expect 0 "split into one domain" -- "$tetiso" split --mesh "$meshes/cube.1" --field sphere --domains 1 --quiet -o "$out/s1"
+"$tetiso" split --mesh "$meshes/cube.1" --field sphere --domains 1 --quiet -o "$work/split1"
+expect 0 "run over a one-domain split" -- "$tetiso" run --split "$work/split1" --quiet -o "$out/s1.ply"
 expect 2 "split without --domains or --partition" -- "$tetiso" split --mesh "$meshes/cube.1" -o "$out/s"
 expect 2 "split of a missing mesh" -- "$tetiso" split --mesh "$out/none" --domains 2 -o "$out/s"
 expect 2 "split into a directory that holds files" -- "$tetiso" split --mesh "$meshes/cube.1" --partition "$work/three.part" -o "$work/split3"
@@ -120,13 +159,92 @@ else
     echo "FAIL: a damaged domain file's error does not name it: $(cat "$work/stderr")"; failures=$((failures + 1))
 fi
 
-# A level outside the range: an empty surface, said so on stderr, exit 0.
-"$tetiso" extract --lattice 10 --field sphere --level 50 -o "$work/empty.ply" 2>"$work/stderr"
-if [ $? -eq 0 ] && grep -q "outside the field's range" "$work/stderr" && [ -s "$work/empty.ply" ]; then
+# A command's outputs succeed or fail together: under a file-size limit of
+# 3 KiB a small sphere (2.4 KB) fits and the report (7 KB) does not, and
+# neither may be left behind. The error names the output, not its
+# temporary, and says why.
+# (extract's report is shorter than its surface: the surface fails there.)
+expect 2 "run with a report past the file-size limit" -- bash -c 'ulimit -f 3; exec "$@"' - \
+    "$tetiso" run --lattice 5 --domains 8 --field sphere --quiet -o "$out/e.ply" --report "$out/r.json"
+failed_write() {
+    grep -qE "$1: cannot write: File too large$" "$work/stderr" && ! grep -qE "\.(ply|json)\.tmp\." "$work/stderr" &&
+        passed=$((passed + 1)) ||
+        { echo "FAIL: a failed write's error: $(cat "$work/stderr")"; failures=$((failures + 1)); }
+}
+failed_write out/r.json
+expect 2 "extract past the file-size limit" -- bash -c 'ulimit -f 1; exec "$@"' - "$tetiso" extract --lattice 30 -o "$out/big.ply"
+failed_write out/big.ply
+# A split that cannot be written says which file and why (it said only
+# "cannot write"), and leaves no directory.
+expect 2 "split past the file-size limit" -- bash -c 'ulimit -f 8; exec "$@"' - \
+    "$tetiso" split --mesh "$meshes/cube.1" --domains 1 --field sphere -o "$out/s"
+failed_write "out/s/domain-0.tetiso"
+# A reduced tetrahedron-sized sphere: 1.8 KB of surface, 3.9 KB of report.
+"$tetiso" extract --lattice 5 --field sphere -o "$work/tiny.ply"
+"$tetiso" reduce "$work/tiny.ply" --phi 0.1 -o "$work/r.ply" --report "$work/r.json" 2>/dev/null
+limit=$(( ($(wc -c <"$work/r.ply") + 1023) / 1024 ))
+if [ "$(wc -c <"$work/r.json")" -gt $((limit * 1024)) ]; then
+    expect 2 "reduce with a report past the file-size limit" -- bash -c "ulimit -f $limit"'; exec "$@"' - \
+        "$tetiso" reduce "$work/tiny.ply" --phi 0.1 -o "$out/r.ply" --report "$out/r.json"
+    failed_write out/r.json
+else
+    echo "FAIL: the reduce report no longer outgrows its surface; the test needs another case"; failures=$((failures + 1))
+fi
+
+# An output path that is not a regular file is refused, never replaced by
+# one (as root, -o of /dev/null would have replaced the device); a symbolic
+# link is written through, to the file it names, and stays a link.
+mkfifo "$out/pipe.json"
+"$tetiso" extract --lattice 10 -o "$work/p.ply" --report "$out/pipe.json" 2>"$work/stderr"
+if [ $? -eq 2 ] && [ -p "$out/pipe.json" ] && [ ! -e "$work/p.ply" ] && grep -q "pipe.json: cannot write: it is a pipe" "$work/stderr"; then
     passed=$((passed + 1))
 else
-    echo "FAIL: level outside the range"; failures=$((failures + 1))
+    echo "FAIL: a pipe as the report: $(cat "$work/stderr")"; failures=$((failures + 1))
 fi
+rm -f "$out/pipe.json"
+mkdir -p "$work/elsewhere" && rm -f "$work/elsewhere/target.ply" "$work/link.ply"
+ln -s "$work/elsewhere/target.ply" "$work/link.ply"
+if "$tetiso" extract --lattice 10 -o "$work/link.ply" && [ -L "$work/link.ply" ] && [ -s "$work/elsewhere/target.ply" ] &&
+    [ -z "$(ls "$work/elsewhere" | grep tmp)" ]; then
+    passed=$((passed + 1))
+else
+    echo "FAIL: an output through a symbolic link"; failures=$((failures + 1))
+fi
+
+# A writer killed before it could clean up (SIGKILL; SIGXFSZ before tetiso
+# ignored it) leaves OUT.tmp.PID.N: the next write of OUT removes those whose
+# process is gone, and only those.
+touch "$work/again.ply.tmp.4194399.17" "$work/again.ply.tmp.$$.18" "$work/again.ply.tmp.notes"
+"$tetiso" extract --lattice 10 -o "$work/again.ply"
+if [ ! -e "$work/again.ply.tmp.4194399.17" ] && [ -e "$work/again.ply.tmp.$$.18" ] && [ -e "$work/again.ply.tmp.notes" ]; then
+    passed=$((passed + 1))
+else
+    echo "FAIL: stale temporaries: $(ls "$work" | grep again)"; failures=$((failures + 1))
+fi
+
+# An error that quotes a file's bytes stays on one line: a newline or a
+# control byte in a VTP attribute is escaped.
+"$tetiso" extract --lattice 8 --field sphere -o "$work/quoted.vtp"
+python3 -c "
+import sys; p = sys.argv[1]; b = open(p, 'rb').read()
+open(p, 'wb').write(b.replace(b'NumberOfPoints=\"', b'NumberOfPoints=\"1\n2\x1b[31m', 1))" "$work/quoted.vtp"
+expect 2 "an attribute with a newline" -- "$tetiso" check "$work/quoted.vtp"
+grep -qF '1\n2\x1b[31m' "$work/stderr" && passed=$((passed + 1)) ||
+    { echo "FAIL: control bytes are not escaped: $(cat -A "$work/stderr")"; failures=$((failures + 1)); }
+
+# A level outside the range: an empty surface, said so on stderr in the same
+# words by every command that extracts, exit 0.
+for command in "extract --lattice 10" "run --lattice 10 --domains 4 --quiet" "run --mesh $meshes/cube.1 --partition $work/three.part --quiet"; do
+    rm -f "$work/empty.ply"
+    # shellcheck disable=SC2086
+    "$tetiso" $command --field sphere --level 50 -o "$work/empty.ply" 2>"$work/stderr"
+    if [ $? -eq 0 ] && grep -qE "^tetiso: the surface is empty: level 50 is outside the field's range \[0(\.[0-9]+)?, [0-9.]+\]$" "$work/stderr" &&
+        [ "$(wc -l <"$work/stderr")" -eq 1 ] && [ -s "$work/empty.ply" ]; then
+        passed=$((passed + 1))
+    else
+        echo "FAIL: $command: level outside the range: $(cat "$work/stderr")"; failures=$((failures + 1))
+    fi
+done
 
 # A reduction's output carries its bounds: reducing it again under a tighter
 # bound leaves the triangles already past it as they are, says so, exit 0.
@@ -156,6 +274,12 @@ c = json.load(open(sys.argv[1]))["topology"]
 assert c["components"] == 1 and c["euler"] == 2 and c["closed"] and c["manifold"] and c["oriented"], c
 PY
 if [ $? -eq 0 ]; then passed=$((passed + 1)); else echo "FAIL: tetiso check of an extracted sphere"; failures=$((failures + 1)); fi
+
+# The same file for any domain count (README's promise).
+"$tetiso" extract --lattice 40 --domains 1 -o "$work/d1.ply" && "$tetiso" extract --lattice 40 --domains 8 -o "$work/d8.ply" &&
+    "$tetiso" extract --lattice 40 --domains 27 -o "$work/d27.ply"
+if cmp -s "$work/d1.ply" "$work/d8.ply" && cmp -s "$work/d1.ply" "$work/d27.ply"; then passed=$((passed + 1)); else
+    echo "FAIL: output depends on the domain count"; failures=$((failures + 1)); fi
 
 # The same file for any thread count.
 "$tetiso" extract --lattice 40 --threads 1 -o "$work/t1.ply" && "$tetiso" extract --lattice 40 --threads 2 -o "$work/t2.ply"

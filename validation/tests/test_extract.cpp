@@ -114,6 +114,22 @@ TEST(Extract, LockedVerticesAreExactlyThoseOnSharedEdges) {
     EXPECT_TRUE(std::none_of(combined.flags.begin(), combined.flags.end(), [](std::uint8_t f) { return f & kLocked; }));
 }
 
+// The combined surface is the same arrays for any number of domains, as the
+// README promises of `tetiso extract`: the triangles used to come in the
+// domains' order (the same set, the same orientation, other bytes).
+TEST(Extract, CombinedSurfaceIsTheSameBytesForAnyDomainCount) {
+    for (const char* field : {"paper", "gyroid"}) {
+        const Piece one = lattice_surface(40, 1, field);
+        for (const int domains : {8, 27}) {
+            const Piece many = lattice_surface(40, domains, field);
+            EXPECT_EQ(many.key, one.key) << field << ", " << domains << " domains";
+            EXPECT_EQ(many.x, one.x) << field << ", " << domains << " domains";
+            EXPECT_EQ(many.flags, one.flags) << field << ", " << domains << " domains";
+            EXPECT_EQ(many.triangles, one.triangles) << field << ", " << domains << " domains";
+        }
+    }
+}
+
 TEST(Extract, SurfaceThroughMeshNodesIsConsistentAndManifold) {
     // x = 2.5 at level 0 passes through a whole plane of nodes (i = 5 of 11):
     // every domain must classify them alike.
@@ -179,6 +195,23 @@ TEST(Extract, LevelOutsideTheRangeGivesAnEmptySurface) {
     const Piece empty = lattice_surface(10, 2, "sphere", 100.0);
     EXPECT_EQ(empty.triangle_count(), 0u);
     EXPECT_EQ(empty.vertex_count(), 0u);
+}
+
+// OpenMP takes any thread count; libgomp overflowed its stack at 10^5
+// (SIGSEGV) and could not create 5 * 10^4. Above kMaxThreads it is an error.
+TEST(Extract, ThreadCountsAboveTheLimitAreRefused) {
+    const Lattice lattice(6); // Decomposition keeps a reference to it
+    const Decomposition one(lattice, 1);
+    const Domain domain = one.make_domain(0, *make_field("sphere"));
+    EXPECT_NO_THROW(extract(domain, 2.0f, ExtractOptions{2}));
+    for (const int threads : {kMaxThreads + 1, 50000, 100000}) {
+        try {
+            extract(domain, 2.0f, ExtractOptions{threads});
+            ADD_FAILURE() << threads << " threads were accepted";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("at most " + std::to_string(kMaxThreads)), std::string::npos) << e.what();
+        }
+    }
 }
 
 TEST(Extract, BadDomainsAreRefusedWithAClearError) {

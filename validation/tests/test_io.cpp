@@ -2,6 +2,8 @@
 // nothing left behind for anything malformed.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <fstream>
 
 #include "test_support.hpp"
@@ -201,6 +203,48 @@ TEST_F(Files, FailedWritesLeaveNothingBehind) {
     EXPECT_THROW(write_piece(piece, at("taken.ply")), Error);
     EXPECT_TRUE(fs::is_directory(at("taken.ply")));
     EXPECT_EQ(files(), 1u) << "no temporary file may be left";
+}
+
+// Several outputs of one command succeed or fail together: a failure in the
+// second (a full disk under the report) leaves neither, nor a temporary.
+TEST_F(Files, OutputsOfOneCommandSucceedOrFailTogether) {
+    const Piece piece = test::lattice_surface(8, 1, "sphere");
+    {
+        OutputFiles output;
+        write_piece(piece, at("s.ply"), output);
+        EXPECT_FALSE(fs::exists(at("s.ply"))) << "an output appeared before the others were written";
+        EXPECT_THROW(output.add(at("r.json"), [](const fs::path& temporary) {
+            throw Error(temporary.string() + ": cannot write: No space left on device");
+        }), Error);
+    }
+    EXPECT_EQ(files(), 0u);
+    try {
+        OutputFiles output;
+        output.add(at("r.json"), [](const fs::path& temporary) { throw Error(temporary.string() + ": cannot write"); });
+    } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()), at("r.json").string() + ": cannot write") << "the error names the temporary";
+    }
+    OutputFiles output;
+    write_piece(piece, at("s.ply"), output);
+    write_piece(piece, at("t.vtp"), output);
+    output.commit();
+    EXPECT_EQ(files(), 2u);
+    EXPECT_EQ(read_piece(at("s.ply")).key, piece.key);
+}
+
+// What is at an output's path and is not a regular file is never replaced:
+// a pipe (or a device) is refused, a link is written through.
+TEST_F(Files, OutputsNeverReplaceWhatIsNotARegularFile) {
+    const Piece piece = test::lattice_surface(8, 1, "sphere");
+    ASSERT_EQ(::mkfifo(at("pipe.ply").c_str(), 0600), 0);
+    EXPECT_THROW(write_piece(piece, at("pipe.ply")), Error);
+    EXPECT_EQ(fs::status(at("pipe.ply")).type(), fs::file_type::fifo);
+    fs::create_directory(at("real"));
+    fs::create_symlink("real/s.ply", at("link.ply"));
+    write_piece(piece, at("link.ply"));
+    EXPECT_TRUE(fs::is_symlink(at("link.ply")));
+    EXPECT_EQ(read_piece(at("real/s.ply")).key, piece.key);
+    EXPECT_EQ(files(), 3u);
 }
 
 } // namespace

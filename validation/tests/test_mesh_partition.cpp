@@ -12,8 +12,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cstddef>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -366,6 +369,26 @@ TEST(MeshPartition, BadPartitionsAreClearErrors) {
     EXPECT_NE(message("0 1\n" + ids.substr(2)).find("2 fields"), std::string::npos);
     EXPECT_NE(message("1.5\n" + ids.substr(2)).find(":1: domain id '1.5'"), std::string::npos);
     EXPECT_EQ(message("# written by a solver\n" + ids), ""); // comments are no ids
+    // An id at or above the tetrahedron count leaves a domain empty: refused
+    // by the reader, naming the line, before a counter per id is allocated
+    // (2^31 - 1 overflowed the count of domains; 10^9 allocated 8 GB first).
+    for (const char* huge : {"2147483647", "1000000000", "16251"})
+        EXPECT_NE(message(ids.substr(2) + huge + "\n").find(":16251: domain id " + std::string(huge) + " for a mesh of 16251"),
+                  std::string::npos)
+            << huge;
+
+    // The same ids handed to the partition directly.
+    for (const std::int32_t huge : {std::numeric_limits<std::int32_t>::max(), 1000000000}) {
+        std::vector<std::int32_t> part(tets, 0);
+        part[5] = huge;
+        try {
+            MeshPartition(whole, part, "huge.part");
+            ADD_FAILURE() << "a partition with id " << huge << " was accepted";
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("huge.part: domain id " + std::to_string(huge)), std::string::npos)
+                << e.what();
+        }
+    }
 
     // Ids with a gap leave a domain empty.
     std::vector<std::int32_t> gap(tets, 0);
@@ -389,6 +412,32 @@ TEST(MeshPartition, BadPartitionsAreClearErrors) {
     lattice.lattice = 10;
     lattice.partition = file.path;
     EXPECT_THROW(Job{lattice}, Error);
+}
+
+// One domain shares no edge: its split holds empty arrays, which the reader
+// once copied from with memcpy(null, ..., 0) (UBSan's report, fatal in the
+// sanitised build). The job over it is the job over the mesh.
+TEST(MeshSplit, OneDomainSplitReadsBackAndRuns) {
+    const test::ScratchDirectory scratch("tetiso_split_one");
+    const auto field = make_field("sphere");
+    const MeshPartition partition(cube(*field), std::vector<std::int32_t>(cube(*field).tet_count(), 0), "one");
+    const std::filesystem::path dir = scratch.at("split");
+    write_mesh_split(partition, field->default_level(), dir);
+    const SplitMeshPartition split(dir);
+    ASSERT_EQ(split.domain_count(), 1);
+    EXPECT_TRUE(split.make_domain(0).shared_edges.empty());
+    EXPECT_TRUE(split.edge_domains(0, 1)(0, 1).empty());
+    JobConfig over_split;
+    over_split.split = dir;
+    over_split.domains = 0;
+    over_split.reduce = false;
+    const PartitionFile file(std::vector<std::int32_t>(partition.tet_count(), 0), "one");
+    JobConfig over_mesh = mesh_job("sphere", false);
+    over_mesh.partition = file.path;
+    const Piece a = run_local(Job(over_split), {}).surface, b = run_local(Job(over_mesh), {}).surface;
+    EXPECT_GT(a.triangle_count(), 0u);
+    EXPECT_EQ(a.triangles, b.triangles);
+    EXPECT_EQ(a.key, b.key);
 }
 
 // What a reader of a split meets when its files are not what the index
@@ -461,6 +510,18 @@ TEST(MeshSplit, DamagedOrMismatchedFilesAreClearErrors) {
     other_version.append(reinterpret_cast<const char*>(&digest), sizeof(digest));
     write_bytes(index, other_version);
     EXPECT_NE(message([&] { SplitMeshPartition{dir}; }).find("format version 2"), std::string::npos);
+    // Found by fuzz_split: the root's children with counts whose sum
+    // overflows an int (UBSan), checked before the children themselves.
+    std::string huge_counts = index_bytes.substr(0, index_bytes.size() - 8);
+    constexpr std::size_t kTreeNodes = 8 + 4 + 4 + 8 + 8 + 8 + 8 + 8 + 8; // magic .. fingerprint, then the node count
+    for (const std::size_t node : {std::size_t{1}, std::size_t{2}}) {
+        const std::int32_t count = -1869574000;
+        std::memcpy(huge_counts.data() + kTreeNodes + node * sizeof(DomainTreeNode) + offsetof(DomainTreeNode, count), &count, 4);
+    }
+    const std::uint64_t huge_digest = split_digest(huge_counts.data(), huge_counts.size());
+    huge_counts.append(reinterpret_cast<const char*>(&huge_digest), sizeof(huge_digest));
+    write_bytes(index, huge_counts);
+    EXPECT_NE(message([&] { SplitMeshPartition{dir}; }).find("merge tree node 0 is malformed"), std::string::npos);
     write_bytes(index, index_bytes);
 
     // A split goes only to a new or empty directory; the old one is left as it was.

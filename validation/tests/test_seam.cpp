@@ -124,6 +124,34 @@ TEST(Seam, MergeOrderDoesNotMatter) {
     EXPECT_EQ(a.triangles, b.triangles);
 }
 
+// Triangles in canonical order: rotated to their smallest corner, sorted,
+// their bounds and samples carried along; the order they came in is gone.
+TEST(Seam, TrianglesInCanonicalOrderCarryTheirData) {
+    Piece piece;
+    piece.x = piece.y = piece.z = std::vector<float>(5, 0.0f);
+    piece.key = {1, 2, 3, 4, 5};
+    piece.flags = std::vector<std::uint8_t>(5, 0);
+    piece.triangles = {3, 4, 1, 0, 1, 2, 2, 0, 3};
+    piece.error = {0.3f, 0.1f, 0.2f};
+    piece.sampled = {1, 0, 1};
+    piece.sample_xyz = {0, 0, 0, 1, 1, 1};
+    piece.sample_triangle = {0, 2};
+    Piece shuffled = piece;
+    shuffled.triangles = {0, 3, 2, 1, 3, 4, 1, 2, 0};
+    shuffled.error = {0.2f, 0.3f, 0.1f};
+    shuffled.sampled = {1, 1, 0};
+    shuffled.sample_triangle = {1, 0};
+    order_triangles(piece);
+    order_triangles(shuffled);
+    EXPECT_EQ(piece.triangles, (std::vector<std::int32_t>{0, 1, 2, 0, 3, 2, 1, 3, 4}));
+    EXPECT_EQ(piece.error, (std::vector<float>{0.1f, 0.2f, 0.3f}));
+    EXPECT_EQ(piece.sampled, (std::vector<std::uint8_t>{0, 1, 1}));
+    EXPECT_EQ(piece.sample_triangle, (std::vector<std::int32_t>{2, 1}));
+    EXPECT_EQ(shuffled.triangles, piece.triangles);
+    EXPECT_EQ(shuffled.error, piece.error);
+    EXPECT_EQ(shuffled.sampled, piece.sampled);
+}
+
 TEST(Seam, ReductionAfterASeamStaysNearTheSeam) {
     // Two halves of a reduced gyroid: far from the cut the result keeps the
     // halves' triangles exactly; near it the reduction runs. The region grows

@@ -7,8 +7,10 @@
 // Readers take only these names as tetiso's data: another tool's "flags" or
 // "key" is skipped like any property they do not know.
 // Writers never leave a partial file: they write to a temporary name in the
-// same directory and rename it at the end. Readers check every count against
-// the file and every index against the vertex count.
+// same directory and rename it at the end (through a symbolic link, to the
+// file it names; a device, pipe or socket at the path is refused, never
+// replaced). Readers check every count against the file and every index
+// against the vertex count.
 #pragma once
 
 #include <filesystem>
@@ -29,6 +31,11 @@ SurfaceFormat surface_format(const std::filesystem::path& path);
 // face property named "tetiso_error_bound"), which reads back so that a later
 // reduction spends only what is left of it.
 void write_piece(const Piece& piece, const std::filesystem::path& path);
+
+class OutputFiles;
+// The same as one of several outputs that succeed or fail together: the
+// file is in place once `output.commit()` returns.
+void write_piece(const Piece& piece, const std::filesystem::path& path, OutputFiles& output);
 
 // Reads a surface written by tetiso or, for PLY, by other tools (ascii or
 // binary, float or double coordinates, any integer list type for faces;

@@ -24,6 +24,12 @@ using EdgeKey = std::uint64_t;
 // Largest global node id that fits in half of an EdgeKey.
 inline constexpr GlobalId kMaxGlobalId = (GlobalId{1} << 32) - 1;
 
+// The most threads a stage accepts (ExtractOptions, ReduceOptions, the job's
+// tasks). OpenMP takes any count and fails far above the machine's cores:
+// libgomp overflows its stack at 10^5 threads and cannot create 5 * 10^4, and
+// neither says which option was at fault.
+inline constexpr int kMaxThreads = 1024;
+
 // The key of the mesh edge between two nodes: both global ids packed, the
 // smaller in the high half. It depends on the edge alone, never on the domain
 // that computed it, which is what makes seaming algebraic.

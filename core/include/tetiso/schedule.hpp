@@ -13,6 +13,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <set>
@@ -123,6 +124,11 @@ struct TaskRecord {
         std::int32_t gpu = -1;
         double upload = 0, download = 0;
     } stages;
+    // A domain task's lowest and highest field value (none, low > high,
+    // where the values stayed on a GPU): a surface that comes out empty
+    // says whether its level lies outside them.
+    float field_low = std::numeric_limits<float>::infinity();
+    float field_high = -std::numeric_limits<float>::infinity();
 };
 
 struct JobResult {
@@ -223,7 +229,13 @@ std::optional<JobResult> run_mpi(const Job& job, const Progress& progress);
 
 // MPI for the lifetime of the object, when launched_with_mpi(); otherwise a
 // single rank of one. Finalises on destruction, also when unwinding from an
-// error, so that every rank leaves cleanly.
+// error, so that every rank leaves cleanly. The constructor checks that every
+// rank can reach every other (a rank whose transport failed to start, e.g.
+// its shared memory could not be mapped, would leave the others waiting in
+// their first collective for ever): where that takes more than
+// kMpiStartSeconds, rank 0 says so and the job is aborted.
+inline constexpr int kMpiStartSeconds = 10;
+
 class MpiSession {
 public:
     MpiSession();

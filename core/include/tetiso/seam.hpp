@@ -18,9 +18,18 @@ namespace tetiso {
 // (the pieces were not extracted consistently).
 Piece merge_by_key(const Piece& a, const Piece& b);
 
-// Merges any number of pieces, pairwise in a balanced tree; the result does
-// not depend on the order of `pieces`.
+// Merges any number of pieces, pairwise in a balanced tree, and puts the
+// triangles in canonical order (order_triangles): the result does not depend
+// on the order of `pieces`, nor on how a surface was cut into them (the
+// lattice's surface is the same bytes for any number of domains).
 Piece merge_all(std::vector<Piece> pieces);
+
+// Each triangle rotated to start at its smallest vertex index (its
+// orientation kept), the triangles sorted by their three indices, and the
+// per-triangle arrays (error, sampled, sample_triangle) carried along. As the
+// vertices are in key order, two pieces with the same vertices and oriented
+// triangles become the same arrays, however they were put together.
+void order_triangles(Piece& piece);
 
 // Clears kLocked on every vertex whose edge lies in no domain outside
 // `piece.domains`: its neighbourhood is complete, so reduction may touch it.

@@ -1,33 +1,91 @@
 #pragma once
 
-#include <atomic>
 #include <filesystem>
 #include <string>
 #include <system_error>
-
-#include <unistd.h>
+#include <utility>
+#include <vector>
 
 #include "tetiso/error.hpp"
 
 namespace tetiso {
 
 namespace detail {
-std::filesystem::path temporary_sibling(const std::filesystem::path& path);
-}
+// Where an output named `path` is written: `path` itself, or the file a
+// symbolic link there points to (the link is kept). Throws tetiso::Error
+// naming `path` when something other than a regular file or a directory is
+// there: a device, a pipe or a socket is never replaced by a file.
+std::filesystem::path output_target(const std::filesystem::path& path);
+// A new temporary name beside `target`: TARGET.tmp.PID.N.
+std::filesystem::path temporary_sibling(const std::filesystem::path& target);
+// Removes the temporaries beside `target` whose writing process is gone
+// (killed by SIGKILL or SIGXFSZ, say, before it could remove them).
+void remove_stale_temporaries(const std::filesystem::path& target);
+// The message of an error a writer raised naming its temporary file, with
+// the output's path in its place.
+std::string name_output_in(std::string message, const std::filesystem::path& temporary,
+                           const std::filesystem::path& path);
+} // namespace detail
+
+// The files one command writes, which succeed or fail together: each is
+// written under a temporary name beside it as it comes (add), and all are
+// renamed into place by commit(). Until then nothing is at the outputs'
+// paths; an OutputFiles destroyed before commit() (a later output failed,
+// or the work after it) removes its temporaries, leaving earlier files at
+// those paths as they were.
+class OutputFiles {
+public:
+    OutputFiles() = default;
+    OutputFiles(const OutputFiles&) = delete;
+    OutputFiles& operator=(const OutputFiles&) = delete;
+    ~OutputFiles() { discard(); }
+
+    // Runs `write` with the temporary path of `path`. An Error it throws
+    // names `path`, not the temporary.
+    template <class WriteFunction>
+    void add(const std::filesystem::path& path, WriteFunction&& write) {
+        const std::filesystem::path target = detail::output_target(path);
+        detail::remove_stale_temporaries(target);
+        pending_.push_back({path, target, detail::temporary_sibling(target)});
+        const std::filesystem::path& temporary = pending_.back().temporary;
+        try {
+            write(temporary);
+        } catch (const Error& e) {
+            throw Error(detail::name_output_in(e.what(), temporary, path));
+        }
+    }
+
+    // Renames every output into place, in the order they were added.
+    void commit() {
+        while (!pending_.empty()) {
+            const Pending& p = pending_.front();
+            std::error_code ec;
+            std::filesystem::rename(p.temporary, p.target, ec);
+            if (ec) throw Error(p.path.string() + ": cannot write: " + ec.message());
+            pending_.erase(pending_.begin());
+        }
+    }
+
+private:
+    void discard() noexcept {
+        for (const Pending& p : pending_) {
+            std::error_code ignored;
+            std::filesystem::remove_all(p.temporary, ignored); // a file, or a directory `write` filled
+        }
+        pending_.clear();
+    }
+
+    struct Pending {
+        std::filesystem::path path, target, temporary;
+    };
+    std::vector<Pending> pending_;
+};
 
 template <class WriteFunction>
 void write_atomically(const std::filesystem::path& path, WriteFunction&& write) {
-    const std::filesystem::path temporary = detail::temporary_sibling(path);
-    try {
-        write(temporary);
-        std::error_code ec;
-        std::filesystem::rename(temporary, path, ec);
-        if (ec) throw Error(path.string() + ": cannot write: " + ec.message());
-    } catch (...) {
-        std::error_code ignored;
-        std::filesystem::remove_all(temporary, ignored); // a file, or a directory `write` filled
-        throw;
-    }
+    OutputFiles output;
+    output.add(path, std::forward<WriteFunction>(write));
+    output.commit();
 }
 
 } // namespace tetiso

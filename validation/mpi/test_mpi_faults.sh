@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# Faults of the MPI job as a cluster deals them: a worker killed mid-task
+# (SIGKILL, SIGTERM), a rank whose MPI transport cannot start, a worker out
+# of memory, a full disk under rank 0's output. Each must end the job within
+# seconds, with a non-zero status, a message naming the task or the rank,
+# and no output or temporary file left behind.
+# Usage: test_mpi_faults.sh tetiso mpiexec [sanitized]
+# ("sanitized": AddressSanitizer reserves terabytes of address space, so the
+# cases that limit it with ulimit -v cannot run there.)
+set -u
+tetiso=$1
+mpiexec=${2:-mpirun}
+sanitized=${3:-}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+passed=0
+failures=0
+
+# on_rank.sh R SETUP COMMAND...: COMMAND on every rank, after SETUP (shell
+# code: a ulimit, or writing the pid) on rank R alone.
+cat >"$work/on_rank.sh" <<'EOF'
+#!/usr/bin/env bash
+rank=$1 setup=$2
+shift 2
+[ "${OMPI_COMM_WORLD_RANK:-0}" = "$rank" ] && eval "$setup"
+exec "$@"
+EOF
+chmod +x "$work/on_rank.sh"
+
+# check WHAT STATUS SECONDS MOST PATTERN: the job's outcome against the rules.
+check() {
+    local what=$1 status=$2 elapsed=$3 most=$4 pattern=$5 problem=""
+    [ "$status" -ne 0 ] || problem="exit status 0"
+    [ "$status" -ne 124 ] || problem="hung until the test's timeout"
+    [ "$elapsed" -le "$most" ] || problem="${problem:+$problem; }took ${elapsed} s, more than $most"
+    grep -qE "$pattern" "$work/stderr" || problem="${problem:+$problem; }no line matches '$pattern'"
+    [ -z "$(ls -A "$work/out")" ] || problem="${problem:+$problem; }left behind: $(ls -A "$work/out")"
+    if [ -n "$problem" ]; then
+        echo "FAIL: $what: $problem"
+        sed 's/^/  | /' "$work/stderr" | head -20
+        failures=$((failures + 1))
+    else
+        passed=$((passed + 1))
+    fi
+}
+
+# fault WHAT MOST PATTERN RANK SETUP ARGS...: the job run with SETUP on RANK.
+fault() {
+    local what=$1 most=$2 pattern=$3 rank=$4 setup=$5
+    shift 5
+    rm -rf "$work/out" && mkdir "$work/out"
+    local start
+    start=$(date +%s)
+    timeout 120 "$mpiexec" --oversubscribe -np 3 "$work/on_rank.sh" "$rank" "$setup" "$tetiso" "$@" \
+        >"$work/stdout" 2>"$work/stderr"
+    local status=$?
+    check "$what" "$status" $(($(date +%s) - start)) "$most" "$pattern"
+}
+
+# A worker killed while it holds a task: the launcher names the rank and the
+# signal, rank 0 the task each rank held. The job is long enough (tens of
+# seconds alone) that the kill lands in the domain phase.
+for signal in KILL TERM; do
+    rm -rf "$work/out" && mkdir "$work/out" && rm -f "$work/rank1.pid"
+    start=$(date +%s)
+    timeout 120 "$mpiexec" --oversubscribe -np 3 "$work/on_rank.sh" 1 "echo \$\$ >$work/rank1.pid" \
+        "$tetiso" run --lattice 120 --domains 27 --quiet -o "$work/out/s.ply" --report "$work/out/r.json" \
+        >"$work/stdout" 2>"$work/stderr" &
+    job=$!
+    for _ in $(seq 100); do [ -s "$work/rank1.pid" ] && break; sleep 0.1; done
+    sleep 2 # start-up, then into the domain tasks
+    kill -s "$signal" "$(cat "$work/rank1.pid")"
+    wait "$job"
+    status=$?
+    check "worker killed by SIG$signal" "$status" $(($(date +%s) - start)) 60 "rank 1 held task '"
+done
+
+# Rank 0's disk full under the output (a file-size limit): the write fails,
+# the job ends non-zero naming the output, and neither it nor the report
+# (nor a temporary of either) is left.
+fault "full disk on rank 0" 60 "out/s.ply: cannot write: File too large" 0 "ulimit -f 64" \
+    run --lattice 60 --domains 8 --quiet -o "$work/out/s.ply" --report "$work/out/r.json"
+
+if [ -z "$sanitized" ]; then
+    # A rank that cannot start: its shared-memory transport cannot map its
+    # segment, and MPI_Init returns anyway; the others used to wait for it
+    # in the first collective until killed.
+    fault "a rank that cannot start" 40 "could not all reach each other" 1 "ulimit -v 60000" \
+        run --lattice 20 --domains 8 --quiet -o "$work/out/s.ply"
+    # A worker out of memory in its task: reported by the worker, named by
+    # rank 0 with the task.
+    fault "worker out of memory" 60 "task 'domain [0-9]+' failed on rank 1: out of memory" 1 "ulimit -v 400000" \
+        run --lattice 160 --domains 2 --quiet -o "$work/out/s.ply"
+fi
+
+echo "$passed passed, $failures failed"
+[ "$failures" -eq 0 ]
