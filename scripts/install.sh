@@ -8,6 +8,7 @@ packages=(
   build-essential cmake ninja-build pkg-config python3 python3-matplotlib
   libmuparser-dev libcli11-dev nlohmann-json3-dev    # core: expressions, CLI, reports
   libxxhash-dev                                      # core: digests of split mesh files
+  libpugixml-dev zlib1g-dev                          # core: VTK XML meshes (.vtu, .pvtu)
   libopenmpi-dev openmpi-bin                         # the MPI job
   libgtest-dev libgmock-dev libbenchmark-dev         # tests and benchmarks
   libcgal-dev libeigen3-dev                          # checker's self-intersections; CGAL's simplifier baseline

@@ -8,6 +8,7 @@
 #include "commands.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/io.hpp"
+#include "tetiso/mesh_file.hpp"
 #include "tetiso/schedule.hpp"
 
 namespace tetiso::cli {
@@ -131,7 +132,7 @@ void run_job(const RunArguments& args) {
         {"split", c.split.string()},
         {"partition", !c.split.empty() ? "as split" : c.mesh.empty() ? "bisection" : c.partition.empty() ? "METIS" : c.partition.string()},
         {"domains", partition.domain_count()},
-        {"field", !c.split.empty() ? "as split" : c.attribute ? "attribute " + std::to_string(*c.attribute) : c.field},
+        {"field", !c.split.empty() ? "as split" : c.attribute ? "attribute " + std::to_string(*c.attribute) : !c.array.empty() ? "array " + c.array : c.field},
         {"level", job.level()},
         {"reduce", c.reduce},
         {"phi", c.reduce_options.phi},
@@ -166,7 +167,8 @@ void add_run_command(CLI::App& app, Command& run) {
     CLI::Option* lattice = cmd->add_option("--lattice", job.lattice, "Nodes per axis of the N x N x N lattice on [0,5]^3")
                                ->check(CLI::Range(std::int64_t{2}, std::int64_t{1625}));
     CLI::Option* mesh = cmd->add_option("--mesh", job.mesh,
-                                        "TetGen mesh BASE (reads BASE.node and BASE.ele) instead of the lattice");
+                                        "Mesh instead of the lattice: .vtu, .pvtu (its pieces are the domains), .msh, "
+                                        "or TetGen BASE (BASE.node and BASE.ele)");
     lattice->excludes(mesh);
     CLI::Option* split = cmd->add_option("--split", job.split,
                                          "A mesh written by `tetiso split` (a directory): each rank reads only the "
@@ -187,6 +189,11 @@ void add_run_command(CLI::App& app, Command& run) {
     cmd->add_option_function<int>(
            "--attribute", [args](int k) { args->job.attribute = k; },
            "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
+        ->needs(mesh);
+    cmd->add_option("--array", job.array, "With a .vtu, .pvtu or .msh: the field is this point array ($NodeData view)")
+        ->needs(mesh);
+    cmd->add_option("--node-ids", job.node_ids, "With a .pvtu: the integer point array of global node ids "
+                                                "(default: the one the file marks, e.g. GlobalNodeIds)")
         ->needs(mesh);
     cmd->add_option_function<double>(
         "--level", [args](double level) { args->job.level = level; },
@@ -220,7 +227,9 @@ void add_run_command(CLI::App& app, Command& run) {
         if (args->job.lattice == 0 && args->job.mesh.empty() && args->job.split.empty())
             throw CLI::ValidationError("give --lattice N, --mesh BASE or --split DIR");
         // With a partition file or a split the count is theirs, unless one is asked for.
-        if ((!args->job.partition.empty() || !args->job.split.empty()) && domains->count() == 0) args->job.domains = 0;
+        if ((!args->job.partition.empty() || !args->job.split.empty() || mesh_format(args->job.mesh) == MeshFormat::pvtu) &&
+            domains->count() == 0)
+            args->job.domains = 0;
         run = [args] { run_job(*args); };
     });
 }
