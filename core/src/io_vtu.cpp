@@ -27,6 +27,9 @@ namespace tetiso {
 namespace {
 
 constexpr std::uint8_t kVtkTetra = 10;
+// DOLFINx writes its cells as Lagrange cells; one of degree 1 (4 points) is
+// a linear tetrahedron.
+constexpr std::uint8_t kVtkLagrangeTetra = 71;
 // vtkDataSetAttributes::DUPLICATECELL: the cell is a copy of another piece's.
 constexpr std::uint8_t kDuplicateCell = 1;
 // zlib cannot inflate more than about 1032 bytes from one; a block header
@@ -500,7 +503,7 @@ MeshArrays VtuParser::parse(const VtuRequest& request) {
         const int type = types[c];
         if (!ghost.empty() && (ghost[c] & kDuplicateCell)) {
             ++out.ghost_cells;
-        } else if (type == kVtkTetra) {
+        } else if (type == kVtkTetra || (type == kVtkLagrangeTetra && corners == 4)) {
             if (corners != 4) fail("cell " + std::to_string(c) + " is a tetrahedron with " + std::to_string(corners) + " corners");
             std::int32_t v[4];
             for (int k = 0; k < 4; ++k) {
@@ -520,7 +523,7 @@ MeshArrays VtuParser::parse(const VtuRequest& request) {
     for (int type = 0; type < 256; ++type)
         if (other[static_cast<std::size_t>(type)])
             fail(std::to_string(other[static_cast<std::size_t>(type)]) + " volume cells of type " + std::to_string(type) +
-                 " (" + cell_type_name(type) + "); tetiso reads linear tetrahedra (type 10) only");
+                 " (" + cell_type_name(type) + "); tetiso reads linear tetrahedra (type 10, or 71 with 4 points) only");
 
     const pugi::xml_node point_data = piece.child("PointData");
     if (!request.array.empty()) {

@@ -20,13 +20,21 @@
 
 namespace tetiso {
 
-PvtuIndex read_pvtu_index(const std::filesystem::path& path) {
+PvtuIndex read_pvtu_index(const std::filesystem::path& path, int depth) {
     const std::string bytes = detail::read_whole_file(path);
     pugi::xml_document document;
     const pugi::xml_parse_result parsed = document.load_buffer(bytes.data(), bytes.size());
     const auto fail = [&path](const std::string& what) { throw Error(path.string() + ": " + what); };
     if (!parsed) fail(std::string("not well-formed XML (") + parsed.description() + ")");
     const pugi::xml_node root = document.child("VTKFile");
+    // A time series (DOLFINx names it NAME.pvtu): its last data set.
+    if (root && std::string_view(root.attribute("type").as_string()) == "Collection" && depth == 0) {
+        pugi::xml_node last;
+        for (const pugi::xml_node set : root.child("Collection").children("DataSet")) last = set;
+        const std::filesystem::path file(last.attribute("file").as_string());
+        if (file.empty()) fail("a collection without data sets");
+        return read_pvtu_index(file.is_absolute() ? file : path.parent_path() / file, 1);
+    }
     if (!root || std::string_view(root.attribute("type").as_string()) != "PUnstructuredGrid")
         fail("not a VTK PUnstructuredGrid file");
     const pugi::xml_node grid = root.child("PUnstructuredGrid");

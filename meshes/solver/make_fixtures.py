@@ -194,7 +194,8 @@ def write_pieces(points, tets, distance, pieces=3):
 
 def write_msh(points, tets, distance):
     import gmsh
-    gmsh.initialize(["-v", "0"])
+    gmsh.initialize()
+    gmsh.option.setNumber("General.Terminal", 0)
     gmsh.model.add("cube")
     volume = gmsh.model.addDiscreteEntity(3)
     # Sparse tags: nodes numbered from 100 in steps of 3.

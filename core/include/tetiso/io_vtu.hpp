@@ -8,7 +8,8 @@
 // connectivity, Float32 or Float64 points and fields). The XML is parsed by
 // pugixml and the blocks inflated by zlib; only little-endian files are read.
 //
-// Cells: linear tetrahedra (VTK_TETRA) are kept; cells of lower dimension
+// Cells: linear tetrahedra (VTK_TETRA, or VTK_LAGRANGE_TETRAHEDRON with 4
+// points, as DOLFINx writes them) are kept; cells of lower dimension
 // (vertices, lines, triangles, quads: a solver's boundary markers) are no
 // volume and are skipped; any other volume cell is an error naming its type
 // and count. Cells marked as ghosts (cell array vtkGhostType, bit

@@ -40,8 +40,10 @@ struct PvtuIndex {
 };
 
 // Throws tetiso::Error naming the file if it is not a PUnstructuredGrid with
-// at least one piece.
-PvtuIndex read_pvtu_index(const std::filesystem::path& path);
+// at least one piece. A collection (a time series, as DOLFINx writes
+// NAME.pvtu beside NAME000000.pvtu, ...) stands for its last data set;
+// `depth` counts such steps, of which one is followed.
+PvtuIndex read_pvtu_index(const std::filesystem::path& path, int depth = 0);
 
 class PvtuPartition final : public Partition {
 public:
