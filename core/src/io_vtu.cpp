@@ -20,7 +20,7 @@
 #include <pugixml.hpp>
 #include <zlib.h>
 
-#include "io_formats.hpp"
+#include "mapped_file.hpp"
 #include "tetiso/error.hpp"
 
 namespace tetiso {
@@ -114,8 +114,11 @@ private:
         return v;
     }
     std::string decode_base64(std::string_view text, const std::string& what) const;
-    // The bytes of an array of `count` values of `scalar` (binary encodings).
-    std::string binary_payload(const pugi::xml_node& array, std::uint64_t count, Scalar scalar, const std::string& what) const;
+    // The bytes of an array of `count` values of `scalar` (binary
+    // encodings): a view into the file for uncompressed raw data, else into
+    // `storage`, which holds what was decoded.
+    std::string_view binary_payload(const pugi::xml_node& array, std::uint64_t count, Scalar scalar,
+                                    const std::string& what, std::string& storage) const;
     std::string inflate(std::string_view header, std::string_view blocks, std::uint64_t expected, const std::string& what) const;
 
     template <class T>
@@ -239,8 +242,8 @@ std::string VtuParser::inflate(std::string_view header, std::string_view blocks,
     return out;
 }
 
-std::string VtuParser::binary_payload(const pugi::xml_node& array, std::uint64_t count, Scalar scalar,
-                                      const std::string& what) const {
+std::string_view VtuParser::binary_payload(const pugi::xml_node& array, std::uint64_t count, Scalar scalar,
+                                           const std::string& what, std::string& storage) const {
     const std::string_view format = array.attribute("format").as_string();
     if (count > std::numeric_limits<std::uint64_t>::max() / 8) fail(what + ": too many values");
     const std::uint64_t expected = count * size_of(scalar);
@@ -287,6 +290,12 @@ std::string VtuParser::binary_payload(const pugi::xml_node& array, std::uint64_t
                     length += read_header_word(reinterpret_cast<const unsigned char*>(header.data()) + (3 + b) * header_bytes_);
             }
             if (length > rest.size() - header.size()) fail(what + ": appended data is truncated");
+            if (!compressed_) { // the common large case: no copy
+                if (length != expected)
+                    fail(what + ": " + std::to_string(length) + " bytes, where " + std::to_string(count) +
+                         " values need " + std::to_string(expected));
+                return rest.substr(header.size(), static_cast<std::size_t>(length));
+            }
             data.assign(rest.substr(header.size(), static_cast<std::size_t>(length)));
         } else {
             const std::size_t first = base64_length(header_bytes_ * (compressed_ ? 3 : 1));
@@ -314,7 +323,10 @@ std::string VtuParser::binary_payload(const pugi::xml_node& array, std::uint64_t
     } else {
         fail(what + ": unknown format '" + std::string(format) + "'");
     }
-    if (compressed_) return inflate(header, data, expected, what);
+    if (compressed_) {
+        storage = inflate(header, data, expected, what);
+        return storage;
+    }
     if (header.size() != header_bytes_) fail(what + ": binary data is shorter than its header");
     const std::uint64_t length = read_header_word(reinterpret_cast<const unsigned char*>(header.data()));
     if (length != expected)
@@ -322,7 +334,8 @@ std::string VtuParser::binary_payload(const pugi::xml_node& array, std::uint64_t
              std::to_string(expected));
     if (data.size() < expected) fail(what + ": data is truncated");
     data.resize(static_cast<std::size_t>(expected));
-    return data;
+    storage = std::move(data);
+    return storage;
 }
 
 template <class T, class S>
@@ -345,13 +358,21 @@ T convert_value(S value, bool& ok) {
 }
 
 template <class T, class S>
-void convert_all(const std::string& bytes, std::vector<T>& out, bool& ok) {
+void convert_all(std::string_view bytes, std::vector<T>& out, bool& ok) {
     const std::size_t n = bytes.size() / sizeof(S);
     out.resize(n);
-    for (std::size_t i = 0; i < n && ok; ++i) {
-        S value;
-        std::memcpy(&value, bytes.data() + i * sizeof(S), sizeof(S));
-        out[i] = convert_value<T>(value, ok);
+    if constexpr (std::is_same_v<T, S>) {
+        std::memcpy(out.data(), bytes.data(), n * sizeof(S));
+    } else {
+        bool all = true; // checked once at the end: a branch-free loop
+        for (std::size_t i = 0; i < n; ++i) {
+            S value;
+            std::memcpy(&value, bytes.data() + i * sizeof(S), sizeof(S));
+            bool one = true;
+            out[i] = convert_value<T>(value, one);
+            all &= one;
+        }
+        ok = ok && all;
     }
 }
 
@@ -414,7 +435,8 @@ std::vector<T> VtuParser::read_array(const pugi::xml_node& array, std::uint64_t 
             fail(what + ": " + std::to_string(out.size()) + " values, where " + std::to_string(count) + " are expected");
         return out;
     }
-    const std::string bytes = binary_payload(array, count, *scalar, what);
+    std::string storage;
+    const std::string_view bytes = binary_payload(array, count, *scalar, what, storage);
     switch (*scalar) {
     case Scalar::int8: convert_all<T, std::int8_t>(bytes, out, ok); break;
     case Scalar::uint8: convert_all<T, std::uint8_t>(bytes, out, ok); break;
@@ -486,17 +508,35 @@ MeshArrays VtuParser::parse(const VtuRequest& request) {
         fail("the last cell offset " + std::to_string(corner_count) + " is out of range");
     const pugi::xml_node connectivity_node = find_array(cell_node, "connectivity");
     if (cells > 0 && !connectivity_node) fail("no connectivity array");
-    const auto connectivity = cells ? read_array<std::int64_t>(connectivity_node, static_cast<std::uint64_t>(corner_count), "the connectivity")
-                                    : std::vector<std::int64_t>{};
+    // Point indices fit 32 bits (the point count does), whatever the type.
+    auto connectivity = cells ? read_array<std::int32_t>(connectivity_node, static_cast<std::uint64_t>(corner_count), "the connectivity")
+                              : std::vector<std::int32_t>{};
     std::vector<std::uint8_t> ghost;
     for (const pugi::xml_node a : piece.child("CellData").children("DataArray"))
         if (std::string_view(a.attribute("Name").as_string()) == "vtkGhostType")
             ghost = read_array<std::uint8_t>(a, cells, "cell array vtkGhostType");
 
+    // The common case, a piece of tetrahedra only and no ghosts: the
+    // connectivity is the tetrahedra, checked in one pass.
+    bool only_tets = cells > 0 && ghost.empty() && static_cast<std::uint64_t>(corner_count) == 4 * cells;
+    for (std::size_t c = 0; c < cells && only_tets; ++c)
+        only_tets = types[c] == kVtkTetra && offsets[c] == static_cast<std::int64_t>(4 * (c + 1));
+    if (only_tets) {
+        bool in_range = true, distinct = true;
+        const auto n = static_cast<std::int64_t>(points);
+        for (std::size_t c = 0; c < cells; ++c) {
+            const std::int32_t* v = connectivity.data() + 4 * c;
+            for (int k = 0; k < 4; ++k) in_range &= v[k] >= 0 && v[k] < n;
+            distinct &= v[0] != v[1] && v[0] != v[2] && v[0] != v[3] && v[1] != v[2] && v[1] != v[3] && v[2] != v[3];
+        }
+        only_tets = in_range && distinct;
+        if (only_tets) out.tets = std::move(connectivity);
+        // else: the cell-by-cell pass below names the culprit
+    }
     // Which cells are tetrahedra, and which volume cells are not.
     std::vector<std::uint64_t> other(256, 0);
     std::int64_t previous = 0;
-    for (std::size_t c = 0; c < cells; ++c) {
+    for (std::size_t c = 0; c < cells && !only_tets; ++c) {
         const std::int64_t end = offsets[c];
         if (end < previous || end > corner_count) fail("cell offset " + std::to_string(c) + " is out of order or range");
         const std::int64_t corners = end - previous;
@@ -578,8 +618,8 @@ MeshArrays parse_vtu(std::string_view bytes, const std::string& name, const VtuR
 }
 
 MeshArrays read_vtu(const std::filesystem::path& path, const VtuRequest& request) {
-    const std::string bytes = detail::read_whole_file(path);
-    return parse_vtu(bytes, path.string(), request);
+    const detail::MappedFile file(path);
+    return parse_vtu(file.bytes(), path.string(), request);
 }
 
 } // namespace tetiso

@@ -41,7 +41,7 @@ bool negatively_oriented(const Domain& d, std::int32_t a, std::int32_t b, std::i
     return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]) < 0;
 }
 
-Domain domain_from_arrays(const MeshArrays& arrays, const Field* field) {
+Domain domain_from_arrays(MeshArrays arrays, const Field* field) {
     Domain domain;
     const std::size_t n = arrays.x.size();
     domain.x.assign(arrays.x.begin(), arrays.x.end());
@@ -57,7 +57,7 @@ Domain domain_from_arrays(const MeshArrays& arrays, const Field* field) {
     domain.gid.resize(n);
     for (std::size_t i = 0; i < n; ++i) domain.gid[i] = static_cast<GlobalId>(i);
     domain.interface.assign(n, 0);
-    domain.tets = arrays.tets;
+    domain.tets = std::move(arrays.tets);
     // Extraction orients triangles from positively oriented tetrahedra.
     for (std::size_t t = 0; t < domain.tet_count(); ++t) {
         std::int32_t* v = domain.tets.data() + 4 * t;

@@ -13,6 +13,7 @@
 #include <pugixml.hpp>
 
 #include "io_formats.hpp"
+#include "mapped_file.hpp"
 #include "merge_tree.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/io_vtu.hpp"
@@ -59,7 +60,7 @@ struct LoadedPiece {
     std::vector<std::int32_t> used; // point indices used by tetrahedra, sorted by id
 };
 
-LoadedPiece load_piece(const std::string& bytes, const std::filesystem::path& path, const MeshSource& source,
+LoadedPiece load_piece(std::string_view bytes, const std::filesystem::path& path, const MeshSource& source,
                        const std::string& ids_name, bool several) {
     VtuRequest request;
     request.array = source.array;
@@ -117,7 +118,8 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
     std::int64_t used_nodes = 0;
     for (int p = 0; p < parts; ++p) {
         const std::filesystem::path& path = pieces_[static_cast<std::size_t>(p)];
-        const std::string bytes = detail::read_whole_file(path);
+        const detail::MappedFile file(path);
+        const std::string_view bytes = file.bytes();
         piece_digests_.push_back(split_digest(bytes.data(), bytes.size()));
         const LoadedPiece piece = load_piece(bytes, path, source, ids_name_, several);
         const MeshArrays& a = piece.arrays;
@@ -271,7 +273,8 @@ Domain PvtuPartition::make_domain(int domain) const {
                     std::to_string(domain_count()));
     const int p = source_id(domain);
     const std::filesystem::path& path = pieces_[static_cast<std::size_t>(p)];
-    const std::string bytes = detail::read_whole_file(path);
+    const detail::MappedFile file(path);
+    const std::string_view bytes = file.bytes();
     if (split_digest(bytes.data(), bytes.size()) != piece_digests_[static_cast<std::size_t>(p)])
         throw Error(path.string() + ": the piece changed after the job first read it");
     const LoadedPiece piece = load_piece(bytes, path, source_, ids_name_, pieces_.size() > 1);

@@ -15,6 +15,8 @@ formats:
                         points of each piece in another order, the shared
                         points of the last piece one float ulp away from
                         the others' (ids match them, coordinates would not);
+  validation/fuzz/corpus/{vtu,msh}/
+                        the fuzzers' seeds: the same formats for 8 points;
   cube-<version>.msh    Gmsh 4.1 and 2.2, ascii and binary, written by Gmsh
                         itself (python3-gmsh) with the field as $NodeData.
 
@@ -33,7 +35,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 N = 7
 
 
-def build_mesh():
+def build_mesh(N=N):
     rng = np.random.default_rng(20261126)
     axis = np.linspace(0.0, 5.0, N)
     x, y, z = np.meshgrid(axis, axis, axis, indexing="ij")
@@ -192,7 +194,7 @@ def write_pieces(points, tets, distance, pieces=3):
         f.write(text)
 
 
-def write_msh(points, tets, distance):
+def write_msh(points, tets, distance, directory=HERE, prefix="cube"):
     import gmsh
     gmsh.initialize()
     gmsh.option.setNumber("General.Terminal", 0)
@@ -208,13 +210,30 @@ def write_msh(points, tets, distance):
         gmsh.option.setNumber("Mesh.MshFileVersion", version)
         gmsh.option.setNumber("Mesh.Binary", binary)
         gmsh.option.setNumber("PostProcessing.SaveMesh", 0)
-        name = os.path.join(HERE, f"cube-{version}{'-binary' if binary else ''}.msh")
+        name = os.path.join(directory, f"{prefix}-{version}{'-binary' if binary else ''}.msh")
         gmsh.write(name)
         gmsh.view.write(view, name, append=True)
     gmsh.finalize()
 
 
+def write_fuzz_seeds():
+    """Seed corpora of the fuzzers (validation/fuzz/corpus/): a 2x2x2
+    lattice (6 tetrahedra) in every encoding and format."""
+    corpus = os.path.join(HERE, "..", "..", "validation", "fuzz", "corpus")
+    points, tets, distance = build_mesh(2)
+    os.makedirs(os.path.join(corpus, "vtu"), exist_ok=True)
+    os.makedirs(os.path.join(corpus, "msh"), exist_ok=True)
+    for name, encoding, compressed, header, conn, floats in ENCODINGS:
+        write_vtu(os.path.join(corpus, "vtu", f"{name}.vtu"), Writer(encoding, compressed, header), points, tets,
+                  [("distance", distance), ("GlobalNodeIds", np.arange(len(points), dtype=np.int64))],
+                  [("vtkGhostType", np.array([0, 0, 0, 0, 0, 1], np.uint8))], conn, floats,
+                  global_ids="GlobalNodeIds")
+    if "--no-msh" not in sys.argv:
+        write_msh(points, tets, distance, os.path.join(corpus, "msh"), "seed")
+
+
 def main():
+    write_fuzz_seeds()
     points, tets, distance = build_mesh()
     for name, encoding, compressed, header, conn, floats in ENCODINGS:
         write_vtu(os.path.join(HERE, f"cube-{name}.vtu"), Writer(encoding, compressed, header), points, tets,

@@ -64,7 +64,7 @@ Domain read_mesh(const MeshSource& source, std::vector<std::int32_t>* piece_of_t
 // A Domain from arrays a reader produced: coordinates stored as float, the
 // field taken from `arrays.f` or evaluated by `field` at the coordinates as
 // read, tetrahedra reoriented where negative. Node i gets global id i.
-Domain domain_from_arrays(const MeshArrays& arrays, const Field* field);
+Domain domain_from_arrays(MeshArrays arrays, const Field* field);
 
 // Whether tetrahedron (a, b, c, d) of `domain` is negatively oriented, in
 // double precision over its stored (float) coordinates.
