@@ -130,7 +130,7 @@ void run_job(const RunArguments& args) {
         {"lattice", c.lattice},
         {"mesh", c.mesh.string()},
         {"split", c.split.string()},
-        {"partition", !c.split.empty() ? "as split" : c.mesh.empty() ? "bisection" : c.partition.empty() ? "METIS" : c.partition.string()},
+        {"partition", !c.split.empty() ? "as split" : c.mesh.empty() ? "bisection" : !c.partition.empty() ? c.partition.string() : mesh_format(c.mesh) == MeshFormat::pvtu ? "pieces" : "METIS"},
         {"domains", partition.domain_count()},
         {"field", !c.split.empty() ? "as split" : c.attribute ? "attribute " + std::to_string(*c.attribute) : !c.array.empty() ? "array " + c.array : c.field},
         {"level", job.level()},

@@ -117,8 +117,8 @@ Domain read_mesh(const MeshSource& source, std::vector<std::int32_t>* piece_of_t
         throw Error(source.path.string() + ": --attribute applies to TetGen meshes; name a point array with --array");
     if (format == MeshFormat::tetgen && !source.array.empty())
         throw Error(source.path.string() + ": a TetGen mesh has no named arrays; give its node attribute with --attribute");
-    if ((format == MeshFormat::tetgen || format == MeshFormat::msh) && !source.node_ids.empty())
-        throw Error(source.path.string() + ": --node-ids applies to VTK files (.vtu, .pvtu)");
+    if (format != MeshFormat::pvtu && !source.node_ids.empty())
+        throw Error(source.path.string() + ": --node-ids applies to a .pvtu, whose pieces it matches");
     if (!source.field_from_file() && !source.field)
         throw Error(source.path.string() + ": neither a field nor an array was given");
     switch (format) {

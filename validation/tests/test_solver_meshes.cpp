@@ -290,13 +290,13 @@ TEST(SolverMeshes, InconsistentPiecesAreRefusedByName) {
 
 // An ascii piece of tetrahedra over the given points, ids and values.
 std::string ascii_piece(const std::vector<std::array<double, 3>>& points, const std::vector<int>& ids,
-                        const std::vector<double>& values, const std::vector<int>& tets) {
+                        const std::vector<double>& values, const std::vector<int>& tets, int type = 10) {
     std::string xyz, id, value, connectivity, offsets, types;
     for (const auto& p : points) xyz += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + " ";
     for (const int i : ids) id += std::to_string(i) + " ";
     for (const double v : values) value += std::to_string(v) + " ";
     for (const int v : tets) connectivity += std::to_string(v) + " ";
-    for (std::size_t t = 1; t <= tets.size() / 4; ++t) offsets += std::to_string(4 * t) + " ", types += "10 ";
+    for (std::size_t t = 1; t <= tets.size() / 4; ++t) offsets += std::to_string(4 * t) + " ", types += std::to_string(type) + " ";
     return "<VTKFile type=\"UnstructuredGrid\"><UnstructuredGrid><Piece NumberOfPoints=\"" + std::to_string(points.size()) +
            "\" NumberOfCells=\"" + std::to_string(tets.size() / 4) + "\"><PointData GlobalIds=\"ids\">" +
            "<DataArray type=\"Float64\" Name=\"f\" format=\"ascii\">" + value + "</DataArray>" +
@@ -332,6 +332,14 @@ TEST(SolverMeshes, PiecesThatDisagreeOnAValueAreRefused) {
     const std::string what = message([&] { PvtuPartition pieces(source); });
     EXPECT_NE(what.find(scratch.path("b.vtu").string() + ": node id 1 has value 1.5"), std::string::npos) << what;
     EXPECT_NE(what.find("a.vtu gives it 1"), std::string::npos) << what;
+    // DOLFINx's cells: Lagrange tetrahedra (type 71) of 4 points are linear
+    // ones; its NAME.pvtu is a time series, which stands for its last step.
+    scratch.write("b.vtu", ascii_piece(b_points, {0, 1, 2, 4}, {0, 1, 2, 4}, {0, 1, 2, 3}, 71));
+    scratch.write("series.pvtu", "<VTKFile type=\"Collection\"><Collection><DataSet timestep=\"0\" file=\"none.pvtu\"/>"
+                                 "<DataSet timestep=\"1\" file=\"two.pvtu\"/></Collection></VTKFile>");
+    source.path = scratch.path("series.pvtu");
+    EXPECT_EQ(PvtuPartition(source).tet_count(), 2);
+    source.path = scratch.path("two.pvtu");
     // A node id given to two points of one piece.
     scratch.write("b.vtu", ascii_piece(b_points, {0, 1, 2, 1}, {0, 1, 2, 4}, {0, 1, 2, 3}));
     EXPECT_NE(message([&] { PvtuPartition pieces(source); }).find("node id 1 is given to points"), std::string::npos);
