@@ -92,6 +92,19 @@ TEST(SolverMeshes, EveryEncodingReadsToTheSameDomain) {
     expect_sphere(extract(reference, kLevel));
 }
 
+TEST(SolverMeshes, GmshBoundaryElementsAreNoVolume) {
+    // A boundary triangle, a line and a point (Gmsh writes physical groups
+    // of those) are skipped; the volume is the same.
+    const std::string text = read_bytes(kSolver / "cube-2.2.msh");
+    const std::string from = "$Elements\n1296\n";
+    ASSERT_NE(text.find(from), std::string::npos);
+    std::string with_boundary = text;
+    with_boundary.replace(text.find(from), from.size(),
+                          "$Elements\n1299\n9001 2 2 0 1 1 2 3\n9002 1 2 0 1 1 2\n9003 15 2 0 1 1\n");
+    const Domain reference = read_cube(kSolver / "cube-2.2.msh");
+    EXPECT_TRUE(same_domain(reference, domain_from_arrays(parse_msh(with_boundary, "boundary.msh", "distance"), nullptr)));
+}
+
 TEST(SolverMeshes, TetgenIsNamedByItsBaseOrEitherFile) {
     const std::unique_ptr<Field> field = make_field("sphere");
     MeshSource source;
