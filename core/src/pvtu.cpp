@@ -89,6 +89,53 @@ LoadedPiece load_piece(std::string_view bytes, const std::filesystem::path& path
     return piece;
 }
 
+// Calls found(u, v, w) for every face of `tets` that only one tetrahedron
+// has. Faces are bucketed by their smallest corner (a counting sort) and
+// each bucket, a dozen faces or so, sorted on its own: for 23 M faces this
+// is several times faster than sorting them all.
+template <class Found>
+void for_each_boundary_face(const std::vector<std::int32_t>& tets, std::size_t nodes, Found found) {
+    const std::size_t count = tets.size() / 4;
+    std::vector<std::int64_t> first(nodes + 1, 0);
+    const auto face = [&](std::size_t t, int skip, std::int32_t (&f)[3]) {
+        int k = 0;
+        for (int c = 0; c < 4; ++c)
+            if (c != skip) f[k++] = tets[4 * t + static_cast<std::size_t>(c)];
+        if (f[0] > f[1]) std::swap(f[0], f[1]);
+        if (f[1] > f[2]) std::swap(f[1], f[2]);
+        if (f[0] > f[1]) std::swap(f[0], f[1]);
+    };
+    for (std::size_t t = 0; t < count; ++t)
+        for (int skip = 0; skip < 4; ++skip) {
+            std::int32_t f[3];
+            face(t, skip, f);
+            ++first[static_cast<std::size_t>(f[0]) + 1];
+        }
+    for (std::size_t v = 0; v < nodes; ++v) first[v + 1] += first[v];
+    std::vector<std::uint64_t> rest(4 * count); // (middle, largest) corner of each face
+    {
+        std::vector<std::int64_t> fill(first.begin(), first.end() - 1);
+        for (std::size_t t = 0; t < count; ++t)
+            for (int skip = 0; skip < 4; ++skip) {
+                std::int32_t f[3];
+                face(t, skip, f);
+                rest[static_cast<std::size_t>(fill[static_cast<std::size_t>(f[0])]++)] =
+                    static_cast<std::uint64_t>(f[1]) << 32 | static_cast<std::uint32_t>(f[2]);
+            }
+    }
+    for (std::size_t v = 0; v < nodes; ++v) {
+        const auto begin = rest.begin() + first[v], end = rest.begin() + first[v + 1];
+        std::sort(begin, end);
+        for (auto i = begin; i != end;) {
+            auto j = i + 1;
+            while (j != end && *j == *i) ++j;
+            if (j - i == 1)
+                found(static_cast<std::int32_t>(v), static_cast<std::int32_t>(*i >> 32), static_cast<std::int32_t>(*i & 0xffffffffu));
+            i = j;
+        }
+    }
+}
+
 // A node on a piece's boundary, as the scan records it.
 struct BoundaryNode {
     GlobalId id;
@@ -138,34 +185,18 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
                     const double dz = static_cast<float>(a.z[u]) - static_cast<double>(static_cast<float>(a.z[v]));
                     edge_sum += std::sqrt(dx * dx + dy * dy + dz * dz);
                 }
-        // Boundary faces: those of one tetrahedron only.
-        std::vector<std::array<std::int32_t, 3>> faces;
-        faces.reserve(4 * tets);
-        for (std::size_t t = 0; t < tets; ++t)
-            for (int skip = 0; skip < 4; ++skip) {
-                std::array<std::int32_t, 3> f{};
-                int k = 0;
-                for (int c = 0; c < 4; ++c)
-                    if (c != skip) f[static_cast<std::size_t>(k++)] = a.tets[4 * t + static_cast<std::size_t>(c)];
-                std::sort(f.begin(), f.end());
-                faces.push_back(f);
-            }
-        std::sort(faces.begin(), faces.end());
+        // Boundary faces: those of one tetrahedron only, found by bucketing
+        // each face by its smallest corner and sorting each small bucket.
         std::vector<std::int32_t> on_boundary;
-        for (std::size_t i = 0; i < faces.size();) {
-            std::size_t j = i + 1;
-            while (j < faces.size() && faces[j] == faces[i]) ++j;
-            if (j - i == 1) {
-                const auto& f = faces[i];
-                for (int e = 0; e < 3; ++e) {
-                    const GlobalId g = a.ids[static_cast<std::size_t>(f[static_cast<std::size_t>(e)])];
-                    const GlobalId h = a.ids[static_cast<std::size_t>(f[static_cast<std::size_t>((e + 1) % 3)])];
-                    boundary_edges.push_back({edge_key(g, h), p});
-                    on_boundary.push_back(f[static_cast<std::size_t>(e)]);
-                }
+        for_each_boundary_face(a.tets, a.x.size(), [&](std::int32_t u, std::int32_t v, std::int32_t w) {
+            const std::int32_t f[3] = {u, v, w};
+            for (int e = 0; e < 3; ++e) {
+                const GlobalId g = a.ids[static_cast<std::size_t>(f[e])];
+                const GlobalId h = a.ids[static_cast<std::size_t>(f[(e + 1) % 3])];
+                boundary_edges.push_back({edge_key(g, h), p});
+                on_boundary.push_back(f[e]);
             }
-            i = j;
-        }
+        });
         std::sort(on_boundary.begin(), on_boundary.end());
         on_boundary.erase(std::unique(on_boundary.begin(), on_boundary.end()), on_boundary.end());
         for (const std::int32_t v : on_boundary) {
