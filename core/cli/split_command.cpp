@@ -10,6 +10,7 @@
 #include "tetiso/mesh_file.hpp"
 #include "tetiso/mesh_partition.hpp"
 #include "tetiso/mesh_split.hpp"
+#include "tetiso/pvtu.hpp"
 
 namespace tetiso::cli {
 namespace {
@@ -27,7 +28,11 @@ void run_split(const SplitArguments& args) {
     require_new_split_directory(args.output); // before the mesh is read and partitioned
     const std::unique_ptr<Field> field = make_field(args.field);
     const MeshSource source{args.mesh, args.attribute, args.array, args.node_ids, field.get()};
-    const auto partition = partition_mesh(source, args.partition, args.domains);
+    // A .pvtu's pieces are written one at a time: no whole mesh is held.
+    const std::unique_ptr<Partition> partition =
+        mesh_format(args.mesh) == MeshFormat::pvtu && args.partition.empty() && args.domains == 0
+            ? std::unique_ptr<Partition>(std::make_unique<PvtuPartition>(source))
+            : partition_mesh(source, args.partition, args.domains);
     const double level = source.field_from_file() ? 0.0 : field->default_level();
     write_mesh_split(*partition, level, args.output);
     if (!args.quiet)

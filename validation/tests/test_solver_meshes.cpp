@@ -24,6 +24,7 @@
 #include "tetiso/io_vtu.hpp"
 #include "tetiso/mesh_file.hpp"
 #include "tetiso/mesh_partition.hpp"
+#include "tetiso/mesh_split.hpp"
 #include "tetiso/pvtu.hpp"
 #include "tetiso/schedule.hpp"
 
@@ -302,18 +303,18 @@ TEST(SolverMeshes, InconsistentPiecesAreRefusedByName) {
 }
 
 // An ascii piece of tetrahedra over the given points, ids and values.
-std::string ascii_piece(const std::vector<std::array<double, 3>>& points, const std::vector<int>& ids,
+std::string ascii_piece(const std::vector<std::array<double, 3>>& points, const std::vector<std::int64_t>& ids,
                         const std::vector<double>& values, const std::vector<int>& tets, int type = 10) {
     std::string xyz, id, value, connectivity, offsets, types;
     for (const auto& p : points) xyz += std::to_string(p[0]) + " " + std::to_string(p[1]) + " " + std::to_string(p[2]) + " ";
-    for (const int i : ids) id += std::to_string(i) + " ";
+    for (const std::int64_t i : ids) id += std::to_string(i) + " ";
     for (const double v : values) value += std::to_string(v) + " ";
     for (const int v : tets) connectivity += std::to_string(v) + " ";
     for (std::size_t t = 1; t <= tets.size() / 4; ++t) offsets += std::to_string(4 * t) + " ", types += std::to_string(type) + " ";
     return "<VTKFile type=\"UnstructuredGrid\"><UnstructuredGrid><Piece NumberOfPoints=\"" + std::to_string(points.size()) +
            "\" NumberOfCells=\"" + std::to_string(tets.size() / 4) + "\"><PointData GlobalIds=\"ids\">" +
            "<DataArray type=\"Float64\" Name=\"f\" format=\"ascii\">" + value + "</DataArray>" +
-           "<DataArray type=\"Int32\" Name=\"ids\" format=\"ascii\">" + id + "</DataArray></PointData>" +
+           "<DataArray type=\"Int64\" Name=\"ids\" format=\"ascii\">" + id + "</DataArray></PointData>" +
            "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">" + xyz +
            "</DataArray></Points><Cells><DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">" +
            connectivity + "</DataArray><DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">" + offsets +
@@ -359,6 +360,31 @@ TEST(SolverMeshes, PiecesThatDisagreeOnAValueAreRefused) {
     // Ids beyond 32 bits.
     scratch.write("b.vtu", ascii_piece(b_points, {0, 1, 2, -4}, {0, 1, 2, 4}, {0, 1, 2, 3}));
     EXPECT_NE(message([&] { PvtuPartition pieces(source); }).find("outside [0, 2^32)"), std::string::npos);
+}
+
+TEST(SolverMeshes, SparseIdsSurviveASplit) {
+    const Scratch scratch;
+    const std::vector<std::array<double, 3>> a_points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    const std::vector<std::array<double, 3>> b_points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, -1}};
+    scratch.write("a.vtu", ascii_piece(a_points, {10, 2000, 5, 4000000000}, {0, 1, 2, 3}, {0, 1, 2, 3}));
+    scratch.write("b.vtu", ascii_piece(b_points, {10, 2000, 5, 7}, {0, 1, 2, 4}, {0, 1, 2, 3}));
+    scratch.write("two.pvtu", "<VTKFile type=\"PUnstructuredGrid\"><PUnstructuredGrid><Piece Source=\"a.vtu\"/>"
+                              "<Piece Source=\"b.vtu\"/></PUnstructuredGrid></VTKFile>");
+    MeshSource source;
+    source.path = scratch.path("two.pvtu");
+    source.array = "f";
+    const PvtuPartition pieces(source);
+    EXPECT_EQ(pieces.node_count(), 5);
+    EXPECT_EQ(pieces.domains_of_edge(10, 2000), (std::vector<int>{0, 1}));
+    const std::filesystem::path dir = scratch.path("split");
+    write_mesh_split(pieces, 0.0, dir);
+    const SplitMeshPartition split(dir);
+    for (int d = 0; d < 2; ++d) {
+        const Domain from_pieces = pieces.make_domain(d), from_split = split.make_domain(d);
+        EXPECT_TRUE(same_domain(from_pieces, from_split)) << d;
+        EXPECT_EQ(from_pieces.shared_edges, from_split.shared_edges) << d;
+    }
+    EXPECT_EQ(pieces.make_domain(0).gid, (std::vector<GlobalId>{5, 10, 2000, 4000000000}));
 }
 
 } // namespace
