@@ -75,7 +75,9 @@ void run_job(const RunArguments& args) {
     std::unique_ptr<Job> built;
     std::string setup_problem;
     try {
-        built = std::make_unique<Job>(args.job);
+        JobConfig config = args.job;
+        config.ranks = mpi.group(); // a .pvtu's pieces are scanned once in all, shared out
+        built = std::make_unique<Job>(config);
     } catch (const Error& e) {
         setup_problem = e.what();
     }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numeric>
 #include <tuple>
@@ -146,34 +147,31 @@ struct BoundaryNode {
 
 } // namespace
 
-PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> field)
-    : field_(std::move(field)), source_(source) {
-    if (field_) source_.field = field_.get();
-    if (source.array.empty() && !source_.field) throw Error(source.path.string() + ": neither a field nor an array was given");
-    const PvtuIndex index = read_pvtu_index(source.path);
-    pieces_ = index.pieces;
-    ids_name_ = !source.node_ids.empty() ? source.node_ids : index.global_ids;
-    const bool several = pieces_.size() > 1;
-    if (pieces_.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 2))
-        throw Error(source.path.string() + ": too many pieces");
-    const int parts = static_cast<int>(pieces_.size());
+namespace {
 
-    std::vector<std::int64_t> part_tets(pieces_.size());
-    std::vector<std::pair<EdgeKey, int>> boundary_edges;
-    std::vector<BoundaryNode> boundary_nodes;
+// What the scan keeps of one piece: counts, its digest, its share of the
+// spacing, and its boundary; or why it could not be read.
+struct PieceScan {
+    std::int64_t tets = 0, used = 0;
     double edge_sum = 0;
-    std::int64_t used_nodes = 0;
-    for (int p = 0; p < parts; ++p) {
-        const std::filesystem::path& path = pieces_[static_cast<std::size_t>(p)];
+    std::uint64_t digest = 0;
+    std::vector<BoundaryNode> nodes;
+    std::vector<std::pair<EdgeKey, int>> edges;
+    std::string error;
+};
+
+PieceScan scan_piece(const std::filesystem::path& path, const MeshSource& source, const std::string& ids_name,
+                     bool several, int p) {
+    PieceScan scan;
+    try {
         const detail::MappedFile file(path);
         const std::string_view bytes = file.bytes();
-        piece_digests_.push_back(split_digest(bytes.data(), bytes.size()));
-        const LoadedPiece piece = load_piece(bytes, path, source, ids_name_, several);
+        scan.digest = split_digest(bytes.data(), bytes.size());
+        const LoadedPiece piece = load_piece(bytes, path, source, ids_name, several);
         const MeshArrays& a = piece.arrays;
         const std::size_t tets = a.tets.size() / 4;
-        part_tets[static_cast<std::size_t>(p)] = static_cast<std::int64_t>(tets);
-        tet_count_ += static_cast<std::int64_t>(tets);
-        used_nodes += static_cast<std::int64_t>(piece.used.size());
+        scan.tets = static_cast<std::int64_t>(tets);
+        scan.used = static_cast<std::int64_t>(piece.used.size());
         // The spacing as mean_edge_length computes it, over float positions.
         for (std::size_t t = 0; t < tets; ++t)
             for (int i = 0; i < 4; ++i)
@@ -183,30 +181,162 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
                     const double dx = static_cast<float>(a.x[u]) - static_cast<double>(static_cast<float>(a.x[v]));
                     const double dy = static_cast<float>(a.y[u]) - static_cast<double>(static_cast<float>(a.y[v]));
                     const double dz = static_cast<float>(a.z[u]) - static_cast<double>(static_cast<float>(a.z[v]));
-                    edge_sum += std::sqrt(dx * dx + dy * dy + dz * dz);
+                    scan.edge_sum += std::sqrt(dx * dx + dy * dy + dz * dz);
                 }
-        // Boundary faces: those of one tetrahedron only, found by bucketing
-        // each face by its smallest corner and sorting each small bucket.
         std::vector<std::int32_t> on_boundary;
         for_each_boundary_face(a.tets, a.x.size(), [&](std::int32_t u, std::int32_t v, std::int32_t w) {
             const std::int32_t f[3] = {u, v, w};
             for (int e = 0; e < 3; ++e) {
                 const GlobalId g = a.ids[static_cast<std::size_t>(f[e])];
                 const GlobalId h = a.ids[static_cast<std::size_t>(f[(e + 1) % 3])];
-                boundary_edges.push_back({edge_key(g, h), p});
+                scan.edges.push_back({edge_key(g, h), p});
                 on_boundary.push_back(f[e]);
             }
         });
+        std::sort(scan.edges.begin(), scan.edges.end());
+        scan.edges.erase(std::unique(scan.edges.begin(), scan.edges.end()), scan.edges.end());
         std::sort(on_boundary.begin(), on_boundary.end());
         on_boundary.erase(std::unique(on_boundary.begin(), on_boundary.end()), on_boundary.end());
         for (const std::int32_t v : on_boundary) {
             const auto i = static_cast<std::size_t>(v);
-            boundary_nodes.push_back({a.ids[i], p, static_cast<float>(a.x[i]), static_cast<float>(a.y[i]),
-                                      static_cast<float>(a.z[i]), a.f.empty() ? 0.0f : static_cast<float>(a.f[i])});
+            scan.nodes.push_back({a.ids[i], p, static_cast<float>(a.x[i]), static_cast<float>(a.y[i]),
+                                  static_cast<float>(a.z[i]), a.f.empty() ? 0.0f : static_cast<float>(a.f[i])});
         }
+    } catch (const Error& e) {
+        scan.error = e.what();
+    }
+    return scan;
+}
+
+// A rank's scans as bytes for RankGroup::all_gather, and back.
+template <class T>
+void put(std::string& out, const T& value) {
+    out.append(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+template <class T>
+void put_array(std::string& out, const std::vector<T>& values) {
+    put(out, static_cast<std::uint64_t>(values.size()));
+    out.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+}
+class Unpacker {
+public:
+    explicit Unpacker(std::string_view bytes) : bytes_(bytes) {}
+    template <class T>
+    T get() {
+        if (bytes_.size() - at_ < sizeof(T)) throw Error("a .pvtu scan's message from another rank is truncated");
+        T value;
+        std::memcpy(&value, bytes_.data() + at_, sizeof(T));
+        at_ += sizeof(T);
+        return value;
+    }
+    template <class T>
+    std::vector<T> get_array() {
+        const auto count = get<std::uint64_t>();
+        if (count > (bytes_.size() - at_) / sizeof(T)) throw Error("a .pvtu scan's message from another rank is truncated");
+        std::vector<T> values(static_cast<std::size_t>(count));
+        std::memcpy(values.data(), bytes_.data() + at_, values.size() * sizeof(T));
+        at_ += values.size() * sizeof(T);
+        return values;
+    }
+    bool done() const { return at_ == bytes_.size(); }
+
+private:
+    std::string_view bytes_;
+    std::size_t at_ = 0;
+};
+
+std::string pack(const std::string& error, const std::vector<std::pair<int, PieceScan>>& scans) {
+    std::string out;
+    put_array(out, std::vector<char>(error.begin(), error.end()));
+    put(out, static_cast<std::uint64_t>(scans.size()));
+    for (const auto& [p, scan] : scans) {
+        put(out, static_cast<std::int64_t>(p));
+        put(out, scan.tets);
+        put(out, scan.used);
+        put(out, scan.edge_sum);
+        put(out, scan.digest);
+        put_array(out, std::vector<char>(scan.error.begin(), scan.error.end()));
+        put_array(out, scan.nodes);
+        std::vector<EdgeKey> keys; // the piece of each is p
+        for (const auto& edge : scan.edges) keys.push_back(edge.first);
+        put_array(out, keys);
+    }
+    return out;
+}
+
+} // namespace
+
+PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> field, const RankGroup& group)
+    : field_(std::move(field)), source_(source) {
+    if (field_) source_.field = field_.get();
+    if (source.array.empty() && !source_.field) throw Error(source.path.string() + ": neither a field nor an array was given");
+    // Every rank takes part in the exchange below whatever goes wrong here,
+    // so that a rank that cannot read its pieces never leaves the others
+    // waiting: what went wrong travels with its share of the scan.
+    std::string index_error;
+    std::vector<std::pair<int, PieceScan>> mine;
+    try {
+        const PvtuIndex index = read_pvtu_index(source.path);
+        pieces_ = index.pieces;
+        ids_name_ = !source.node_ids.empty() ? source.node_ids : index.global_ids;
+        if (pieces_.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 2))
+            throw Error(source.path.string() + ": too many pieces");
+        const int parts = static_cast<int>(pieces_.size());
+        // Each rank scans every size-th piece from its own rank on.
+        for (int p = group.rank; p < parts; p += group.size)
+            mine.emplace_back(p, scan_piece(pieces_[static_cast<std::size_t>(p)], source_, ids_name_, parts > 1, p));
+    } catch (const Error& e) {
+        index_error = e.what();
+    }
+    std::vector<PieceScan> scans(pieces_.size());
+    {
+        const std::vector<std::string> shares =
+            group.all_gather ? group.all_gather(pack(index_error, mine)) : std::vector<std::string>{pack(index_error, mine)};
+        std::vector<std::pair<int, PieceScan>>().swap(mine);
+        std::string first_error;
+        for (const std::string& share : shares) {
+            Unpacker in(share);
+            const auto error = in.get_array<char>();
+            if (!error.empty() && first_error.empty()) first_error.assign(error.begin(), error.end());
+            const auto count = in.get<std::uint64_t>();
+            for (std::uint64_t k = 0; k < count; ++k) {
+                const auto p = in.get<std::int64_t>();
+                if (p < 0 || static_cast<std::size_t>(p) >= scans.size()) throw Error("a .pvtu scan's message names piece " + std::to_string(p));
+                PieceScan& scan = scans[static_cast<std::size_t>(p)];
+                scan.tets = in.get<std::int64_t>();
+                scan.used = in.get<std::int64_t>();
+                scan.edge_sum = in.get<double>();
+                scan.digest = in.get<std::uint64_t>();
+                const auto piece_error = in.get_array<char>();
+                scan.error.assign(piece_error.begin(), piece_error.end());
+                scan.nodes = in.get_array<BoundaryNode>();
+                for (const EdgeKey key : in.get_array<EdgeKey>()) scan.edges.push_back({key, static_cast<int>(p)});
+            }
+        }
+        if (!first_error.empty()) throw Error(first_error);
+        // The first piece, in the file's order, that could not be read.
+        for (const PieceScan& scan : scans)
+            if (!scan.error.empty()) throw Error(scan.error);
+    }
+    const int parts = static_cast<int>(pieces_.size());
+
+    std::vector<std::int64_t> part_tets(pieces_.size());
+    std::vector<std::pair<EdgeKey, int>> boundary_edges;
+    std::vector<BoundaryNode> boundary_nodes;
+    double edge_sum = 0; // piece by piece in the file's order, for any number of ranks
+    std::int64_t used_nodes = 0;
+    for (int p = 0; p < parts; ++p) {
+        PieceScan& scan = scans[static_cast<std::size_t>(p)];
+        part_tets[static_cast<std::size_t>(p)] = scan.tets;
+        tet_count_ += scan.tets;
+        used_nodes += scan.used;
+        edge_sum += scan.edge_sum;
+        piece_digests_.push_back(scan.digest);
+        boundary_edges.insert(boundary_edges.end(), scan.edges.begin(), scan.edges.end());
+        boundary_nodes.insert(boundary_nodes.end(), scan.nodes.begin(), scan.nodes.end());
+        scan = PieceScan();
     }
     std::sort(boundary_edges.begin(), boundary_edges.end());
-    boundary_edges.erase(std::unique(boundary_edges.begin(), boundary_edges.end()), boundary_edges.end());
     spacing_ = edge_sum / static_cast<double>(6 * tet_count_);
 
     // Shared nodes: the first piece's position; values that must agree.

@@ -92,7 +92,7 @@ std::unique_ptr<Partition> make_partition(const JobConfig& config, std::unique_p
     // read only by the rank that runs its task.
     if (mesh_format(config.mesh) == MeshFormat::pvtu && config.partition.empty()) {
         if (config.attribute) throw Error(config.mesh.string() + ": --attribute applies to TetGen meshes; name a point array with --array");
-        auto pieces = std::make_unique<PvtuPartition>(source, std::move(field));
+        auto pieces = std::make_unique<PvtuPartition>(source, std::move(field), config.ranks);
         if (config.domains != 0 && config.domains != pieces->domain_count())
             throw Error(config.mesh.string() + ": " + std::to_string(pieces->domain_count()) + " pieces, where " +
                         std::to_string(config.domains) + " domains were asked for (the pieces are the domains)");

@@ -9,6 +9,9 @@
 
 #include <algorithm>
 #include <array>
+#include <barrier>
+#include <memory>
+#include <thread>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -360,6 +363,61 @@ TEST(SolverMeshes, PiecesThatDisagreeOnAValueAreRefused) {
     // Ids beyond 32 bits.
     scratch.write("b.vtu", ascii_piece(b_points, {0, 1, 2, -4}, {0, 1, 2, 4}, {0, 1, 2, 3}));
     EXPECT_NE(message([&] { PvtuPartition pieces(source); }).find("outside [0, 2^32)"), std::string::npos);
+}
+
+// Ranks simulated by threads: each builds the partition with its share of
+// the scan, and all_gather pools the shares behind a barrier.
+class ThreadRanks {
+public:
+    explicit ThreadRanks(int size) : shares_(static_cast<std::size_t>(size)), barrier_(size) {}
+    RankGroup group(int rank) {
+        RankGroup group;
+        group.rank = rank;
+        group.size = static_cast<int>(shares_.size());
+        group.all_gather = [this, rank](const std::string& mine) {
+            shares_[static_cast<std::size_t>(rank)] = mine;
+            barrier_.arrive_and_wait();
+            std::vector<std::string> all = shares_;
+            barrier_.arrive_and_wait();
+            return all;
+        };
+        return group;
+    }
+
+private:
+    std::vector<std::string> shares_;
+    std::barrier<> barrier_;
+};
+
+TEST(SolverMeshes, RanksShareTheScanAndAgree) {
+    MeshSource source;
+    source.path = kSolver / "pieces.pvtu";
+    source.array = "distance";
+    const PvtuPartition alone(source);
+    for (const int size : {2, 3, 5}) {
+        ThreadRanks ranks(size);
+        std::vector<std::unique_ptr<PvtuPartition>> built(static_cast<std::size_t>(size));
+        std::vector<std::thread> threads;
+        for (int r = 0; r < size; ++r)
+            threads.emplace_back([&, r] { built[static_cast<std::size_t>(r)] = std::make_unique<PvtuPartition>(source, nullptr, ranks.group(r)); });
+        for (std::thread& t : threads) t.join();
+        for (const auto& partition : built) {
+            EXPECT_EQ(partition->fingerprint(), alone.fingerprint()) << size;
+            EXPECT_EQ(partition->spacing(), alone.spacing()) << size;
+            EXPECT_TRUE(same_domain(partition->make_domain(1), alone.make_domain(1))) << size;
+        }
+    }
+    // A piece one rank cannot read: every rank gives its error, none waits.
+    const Scratch scratch;
+    std::filesystem::remove(scratch.path("pieces_2.vtu"));
+    source.path = scratch.path("pieces.pvtu");
+    ThreadRanks ranks(2);
+    std::vector<std::string> errors(2);
+    std::vector<std::thread> threads;
+    for (int r = 0; r < 2; ++r)
+        threads.emplace_back([&, r] { errors[static_cast<std::size_t>(r)] = message([&] { PvtuPartition p(source, nullptr, ranks.group(r)); }); });
+    for (std::thread& t : threads) t.join();
+    for (const std::string& e : errors) EXPECT_NE(e.find("pieces_2.vtu: cannot open"), std::string::npos) << e;
 }
 
 TEST(SolverMeshes, SparseIdsSurviveASplit) {

@@ -2,7 +2,8 @@
 // piece (one .vtu per solver rank) is a domain, and pieces are seamed as
 // lattice boxes are, by global node ids, never by coordinates.
 //
-// Before any task, the partition scans every piece once, one at a time, and
+// Before any task, the partition scans every piece once, one at a time (the
+// ranks of a job share the pieces out and pool what they found), and
 // keeps only what lies on its boundary (faces of one of its tetrahedra
 // only): the ids, positions and values of its boundary nodes and the ids of
 // its boundary edges. A node or edge that two pieces share lies on both
@@ -52,8 +53,12 @@ public:
     // file or piece for anything unreadable or inconsistent: a piece
     // missing or without tetrahedra, several pieces without node ids, a
     // node id twice in one piece, a shared node with different values.
-    // `field`, where given, is kept and used in place of source.field.
-    explicit PvtuPartition(const MeshSource& source, std::unique_ptr<Field> field = nullptr);
+    // `field`, where given, is kept and used in place of source.field. The
+    // ranks of `group` (an MPI job's) scan every size-th piece each and pool
+    // their boundaries, so that every piece is read once in all; the
+    // partition is the same for any group.
+    explicit PvtuPartition(const MeshSource& source, std::unique_ptr<Field> field = nullptr,
+                           const RankGroup& group = {});
     ~PvtuPartition() override;
 
     int domain_count() const override { return static_cast<int>(source_id_.size()); }

@@ -43,6 +43,9 @@ struct JobConfig {
     std::optional<int> attribute;    // with a TetGen mesh: the field is this node attribute instead
     std::string array;               // with a .vtu, .pvtu or .msh: the field is this point array
     std::string node_ids;            // with a .pvtu: the point array of global node ids
+    // The processes of an MPI job, which share out the scan of a .pvtu's
+    // pieces (PvtuPartition); the default is one process doing it all.
+    RankGroup ranks;
     std::optional<double> level;     // default: the field's own (0 for an attribute)
     bool reduce = true;              // --no-reduce turns every reduction off
     ReduceOptions reduce_options;    // phi and friends; threads is set per task
@@ -238,6 +241,11 @@ public:
     bool broadcast(bool value) const;
     // Whether `value` is true on every rank, on every rank.
     bool all(bool value) const;
+    // Every rank's `mine`, in rank order, on every rank; throws
+    // tetiso::Error on every rank if any share is 2 GB or more.
+    std::vector<std::string> all_gather(const std::string& mine) const;
+    // This session as a RankGroup (one process where MPI is not running).
+    RankGroup group() const;
 
 private:
     bool active_ = false;
