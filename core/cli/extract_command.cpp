@@ -1,6 +1,6 @@
 // `tetiso extract`: the lattice test problem, domain by domain, extracted and
-// combined by key into one surface, or an unstructured TetGen mesh as one
-// domain; `--reduce` reduces the result.
+// combined by key into one surface, or an unstructured mesh (TetGen, .vtu,
+// .pvtu, .msh) as one domain; `--reduce` reduces the result.
 #include <algorithm>
 #include <cmath>
 #include <iostream>
@@ -22,7 +22,7 @@ namespace {
 
 struct ExtractArguments {
     std::int64_t lattice = 0;
-    std::filesystem::path mesh;        // TetGen base name, instead of --lattice
+    std::filesystem::path mesh;        // a mesh file (mesh_file.hpp), instead of --lattice
     std::optional<int> attribute;      // with --mesh: the field is this node attribute
     std::string array, node_ids;       // with --mesh: the field's point array; a .pvtu's node ids
     int domains = 1;

@@ -199,7 +199,7 @@ void add_run_command(CLI::App& app, Command& run) {
         ->needs(mesh);
     cmd->add_option_function<double>(
         "--level", [args](double level) { args->job.level = level; },
-        "Isosurface level (default: the field's own, 0.5 for paper; 0 for --attribute)");
+        "Isosurface level (default: the field's own, 0.5 for paper; 0 for --attribute or --array)");
     add_phi_option(*cmd, job.reduce_options.phi);
     cmd->add_option("--max-error", job.max_error_spacings,
                     "Bound on the distance to the raw surface, in spacings: the lattice's, or a mesh's mean "

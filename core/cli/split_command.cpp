@@ -1,5 +1,6 @@
-// `tetiso split`: partition a TetGen mesh once and write one file per domain,
-// so that `tetiso run --split DIR` never holds the whole mesh on any rank.
+// `tetiso split`: partition a mesh (or take a .pvtu's pieces) once and write
+// one file per domain, so that `tetiso run --split DIR` never holds the
+// whole mesh on any rank.
 #include <iostream>
 #include <memory>
 #include <optional>
