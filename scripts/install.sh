@@ -8,12 +8,14 @@ packages=(
   build-essential cmake ninja-build pkg-config python3 python3-matplotlib
   libmuparser-dev libcli11-dev nlohmann-json3-dev    # core: expressions, CLI, reports
   libxxhash-dev                                      # core: digests of split mesh files
+  libpugixml-dev zlib1g-dev                          # core: VTK XML meshes (.vtu, .pvtu)
   libopenmpi-dev openmpi-bin                         # the MPI job
   libgtest-dev libgmock-dev libbenchmark-dev         # tests and benchmarks
   libcgal-dev libeigen3-dev                          # checker's self-intersections; CGAL's simplifier baseline
   libmeshoptimizer-dev                               # reduction baseline
   tetgen libmetis-dev                                # meshes/make_meshes.sh; splitting them into domains
   clang                                              # libFuzzer targets of the readers (scripts/fuzz.sh)
+  python3-dolfinx python3-gmsh gmsh                  # the worked example (FEniCSx solver) and meshes/solver fixtures
 )
 # Optional baselines, built and tested only where installed (their tests are
 # the `reference` label): libvtk9-dev (extraction) and libopenmesh-dev

@@ -1,6 +1,6 @@
 // `tetiso extract`: the lattice test problem, domain by domain, extracted and
-// combined by key into one surface, or an unstructured TetGen mesh as one
-// domain; `--reduce` reduces the result.
+// combined by key into one surface, or an unstructured mesh (TetGen, .vtu,
+// .pvtu, .msh) as one domain; `--reduce` reduces the result.
 #include <algorithm>
 #include <cmath>
 #include <iostream>
@@ -15,15 +15,16 @@
 #include "tetiso/lattice.hpp"
 #include "tetiso/reduce.hpp"
 #include "tetiso/seam.hpp"
-#include "tetiso/tetgen.hpp"
+#include "tetiso/mesh_file.hpp"
 
 namespace tetiso::cli {
 namespace {
 
 struct ExtractArguments {
     std::int64_t lattice = 0;
-    std::filesystem::path mesh;        // TetGen base name, instead of --lattice
+    std::filesystem::path mesh;        // a mesh file (mesh_file.hpp), instead of --lattice
     std::optional<int> attribute;      // with --mesh: the field is this node attribute
+    std::string array, node_ids;       // with --mesh: the field's point array; a .pvtu's node ids
     int domains = 1;
     std::string field = "paper";
     std::optional<double> level;
@@ -81,10 +82,11 @@ private:
 void run_extract_mesh(const ExtractArguments& args, const Field& field, double start) {
     Extractor extractor(args);
     const double t0 = now_seconds();
-    const Domain domain = read_tetgen(TetgenSource{args.mesh, args.attribute, &field});
+    const MeshSource source{args.mesh, args.attribute, args.array, args.node_ids, &field};
+    const Domain domain = read_mesh(source);
     const double t1 = now_seconds();
     // An attribute has no level of its own; an analytic field does.
-    const double level = args.level.value_or(args.attribute ? 0.0 : field.default_level());
+    const double level = args.level.value_or(source.field_from_file() ? 0.0 : field.default_level());
     Piece surface = extractor(domain, static_cast<float>(level));
     const double t2 = now_seconds();
     const auto [lo, hi] = std::minmax_element(domain.f.begin(), domain.f.end());
@@ -104,7 +106,7 @@ void run_extract_mesh(const ExtractArguments& args, const Field& field, double s
     nlohmann::json report = {
         {"command", "extract"},
         {"mesh", args.mesh.string()},
-        {"field", args.attribute ? "attribute " + std::to_string(*args.attribute) : field.description()},
+        {"field", source.field_description()},
         {"level", level},
         {"domains", 1},
         {"nodes", domain.node_count()},
@@ -141,7 +143,8 @@ void run_extract(const ExtractArguments& args) {
     if (args.mesh.empty() == (args.lattice == 0)) throw Error("give either --lattice or --mesh");
     if (!args.mesh.empty() && args.domains != 1)
         throw Error("--mesh reads one domain; --domains applies to the lattice only");
-    if (args.attribute && args.mesh.empty()) throw Error("--attribute needs --mesh");
+    if ((args.attribute || !args.array.empty() || !args.node_ids.empty()) && args.mesh.empty())
+        throw Error("--attribute, --array and --node-ids need --mesh");
     const std::unique_ptr<Field> field = make_field(args.field);
     if (!args.mesh.empty()) return run_extract_mesh(args, *field, start);
     const Lattice lattice(args.lattice);
@@ -235,11 +238,16 @@ void run_extract(const ExtractArguments& args) {
 
 void add_extract_command(CLI::App& app, Command& run) {
     auto args = std::make_shared<ExtractArguments>();
-    CLI::App* cmd = app.add_subcommand("extract", "Extract the isosurface of the lattice test problem or of a TetGen mesh");
+    CLI::App* cmd = app.add_subcommand("extract", "Extract the isosurface of the lattice test problem or of a mesh");
     auto* lattice = cmd->add_option("--lattice", args->lattice, "Nodes per axis of the N x N x N lattice on [0,5]^3")
                         ->check(CLI::Range(std::int64_t{2}, std::int64_t{1625}));
-    cmd->add_option("--mesh", args->mesh, "TetGen mesh BASE (reads BASE.node and BASE.ele) instead of the lattice")
+    cmd->add_option("--mesh", args->mesh,
+                    "Mesh instead of the lattice: .vtu, .pvtu (pieces joined by node ids), .msh, or TetGen BASE "
+                    "(BASE.node and BASE.ele)")
         ->excludes(lattice);
+    cmd->add_option("--array", args->array, "With a .vtu, .pvtu or .msh: the field is this point array ($NodeData view)");
+    cmd->add_option("--node-ids", args->node_ids, "With a .pvtu: the integer point array of global node ids "
+                                                  "(default: the one the file marks, e.g. GlobalNodeIds)");
     cmd->add_option_function<int>(
         "--attribute", [args](int k) { args->attribute = k; },
         "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")

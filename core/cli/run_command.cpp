@@ -10,6 +10,7 @@
 #include "commands.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/io.hpp"
+#include "tetiso/mesh_file.hpp"
 #include "tetiso/schedule.hpp"
 
 namespace tetiso::cli {
@@ -76,7 +77,9 @@ void run_job(const RunArguments& args) {
     std::unique_ptr<Job> built;
     std::string setup_problem;
     try {
-        built = std::make_unique<Job>(args.job);
+        JobConfig config = args.job;
+        config.ranks = mpi.group(); // a .pvtu's pieces are scanned once in all, shared out
+        built = std::make_unique<Job>(config);
     } catch (const Error& e) {
         setup_problem = e.what();
     } catch (const std::bad_alloc&) {
@@ -144,9 +147,9 @@ void run_job(const RunArguments& args) {
         {"lattice", c.lattice},
         {"mesh", c.mesh.string()},
         {"split", c.split.string()},
-        {"partition", !c.split.empty() ? "as split" : c.mesh.empty() ? "bisection" : c.partition.empty() ? "METIS" : c.partition.string()},
+        {"partition", !c.split.empty() ? "as split" : c.mesh.empty() ? "bisection" : !c.partition.empty() ? c.partition.string() : mesh_format(c.mesh) == MeshFormat::pvtu ? "pieces" : "METIS"},
         {"domains", partition.domain_count()},
-        {"field", !c.split.empty() ? "as split" : c.attribute ? "attribute " + std::to_string(*c.attribute) : c.field},
+        {"field", !c.split.empty() ? "as split" : c.attribute ? "attribute " + std::to_string(*c.attribute) : !c.array.empty() ? "array " + c.array : c.field},
         {"level", job.level()},
         {"reduce", c.reduce},
         {"phi", c.reduce_options.phi},
@@ -182,7 +185,8 @@ void add_run_command(CLI::App& app, Command& run) {
     CLI::Option* lattice = cmd->add_option("--lattice", job.lattice, "Nodes per axis of the N x N x N lattice on [0,5]^3")
                                ->check(CLI::Range(std::int64_t{2}, std::int64_t{1625}));
     CLI::Option* mesh = cmd->add_option("--mesh", job.mesh,
-                                        "TetGen mesh BASE (reads BASE.node and BASE.ele) instead of the lattice");
+                                        "Mesh instead of the lattice: .vtu, .pvtu (its pieces are the domains), .msh, "
+                                        "or TetGen BASE (BASE.node and BASE.ele)");
     lattice->excludes(mesh);
     CLI::Option* split = cmd->add_option("--split", job.split,
                                          "A mesh written by `tetiso split` (a directory): each rank reads only the "
@@ -204,7 +208,12 @@ void add_run_command(CLI::App& app, Command& run) {
            "--attribute", [args](int k) { args->job.attribute = k; },
            "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
         ->needs(mesh);
-    add_level_option(*cmd, job.level, "Isosurface level (default: the field's own, 0.5 for paper; 0 for --attribute)");
+    cmd->add_option("--array", job.array, "With a .vtu, .pvtu or .msh: the field is this point array ($NodeData view)")
+        ->needs(mesh);
+    cmd->add_option("--node-ids", job.node_ids, "With a .pvtu: the integer point array of global node ids "
+                                                "(default: the one the file marks, e.g. GlobalNodeIds)")
+        ->needs(mesh);
+    add_level_option(*cmd, job.level, "Isosurface level (default: the field's own, 0.5 for paper; 0 for --attribute or --array)");
     add_phi_option(*cmd, job.reduce_options.phi);
     cmd->add_option("--max-error", job.max_error_spacings,
                     "Bound on the distance to the raw surface, in spacings: the lattice's, or a mesh's mean "
@@ -232,7 +241,9 @@ void add_run_command(CLI::App& app, Command& run) {
         if (args->job.lattice == 0 && args->job.mesh.empty() && args->job.split.empty())
             throw CLI::ValidationError("give --lattice N, --mesh BASE or --split DIR");
         // With a partition file or a split the count is theirs, unless one is asked for.
-        if ((!args->job.partition.empty() || !args->job.split.empty()) && domains->count() == 0) args->job.domains = 0;
+        if ((!args->job.partition.empty() || !args->job.split.empty() || mesh_format(args->job.mesh) == MeshFormat::pvtu) &&
+            domains->count() == 0)
+            args->job.domains = 0;
         run = [args] { run_job(*args); };
     });
 }

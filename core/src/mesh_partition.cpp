@@ -9,6 +9,7 @@
 #include <numeric>
 #include <utility>
 
+#include "merge_tree.hpp"
 #include "table_file.hpp"
 #include "tetiso/error.hpp"
 
@@ -32,8 +33,7 @@ struct MergeNode {
     int lowest = 0;            // lowest source id in the subtree, to break ties
 };
 
-// Weight of the domain pair (p, q), p < q: the edges they share.
-using PairWeights = std::map<std::pair<int, int>, std::int64_t>;
+using detail::PairWeights;
 
 // The merge tree over the source parts, bottom up by heavy-edge matching;
 // the root is the last node.
@@ -139,6 +139,15 @@ int lay_out(const std::vector<MergeNode>& nodes, int node, std::vector<DomainTre
     t.count = static_cast<int>(source_id.size()) - t.first;
     return at;
 }
+
+} // namespace
+
+void detail::build_merge_tree(const std::vector<std::int64_t>& part_tets, const PairWeights& weights,
+                              std::vector<DomainTreeNode>& tree, std::vector<int>& source_id) {
+    lay_out(match_bottom_up(part_tets, weights), 2 * static_cast<int>(part_tets.size()) - 2, tree, source_id);
+}
+
+namespace {
 
 // Offsets of a counting sort: first[k] .. first[k + 1] for bucket k.
 std::vector<std::int64_t> bucket_offsets(const std::vector<std::int64_t>& counts) {
@@ -285,7 +294,7 @@ MeshPartition::MeshPartition(Domain mesh, const std::vector<std::int32_t>& part,
     std::vector<std::pair<EdgeKey, std::int32_t>>().swap(holders);
 
     // The tree, and the domains renumbered in its leaf order.
-    lay_out(match_bottom_up(part_tets, weights), 2 * parts - 2, tree_, source_id_);
+    detail::build_merge_tree(part_tets, weights, tree_, source_id_);
     std::vector<int> domain_of_source(static_cast<std::size_t>(parts));
     for (int d = 0; d < parts; ++d) domain_of_source[static_cast<std::size_t>(source_id_[static_cast<std::size_t>(d)])] = d;
     const auto domain_of = [&](std::int32_t p) { return domain_of_source[static_cast<std::size_t>(p)]; };
@@ -353,9 +362,14 @@ MeshPartition::MeshPartition(Domain mesh, const std::vector<std::int32_t>& part,
                        .value();
 }
 
-std::unique_ptr<MeshPartition> partition_mesh(const TetgenSource& source, const std::filesystem::path& partition_file,
+std::unique_ptr<MeshPartition> partition_mesh(const MeshSource& source, const std::filesystem::path& partition_file,
                                               int domains) {
-    Domain mesh = read_tetgen(source);
+    if (mesh_format(source.path) == MeshFormat::pvtu && partition_file.empty() && domains == 0) {
+        std::vector<std::int32_t> piece_of_tet;
+        Domain mesh = read_mesh(source, &piece_of_tet);
+        return std::make_unique<MeshPartition>(std::move(mesh), piece_of_tet, source.path.string() + "'s pieces");
+    }
+    Domain mesh = read_mesh(source);
     if (!partition_file.empty()) {
         std::vector<std::int32_t> part = read_partition(partition_file, mesh.tet_count());
         auto partition = std::make_unique<MeshPartition>(std::move(mesh), part, partition_file.string());

@@ -14,6 +14,7 @@
 #include "tetiso/lattice.hpp"
 #include "tetiso/mesh_partition.hpp"
 #include "tetiso/mesh_split.hpp"
+#include "tetiso/pvtu.hpp"
 #include "tetiso/seam.hpp"
 #include "tetiso/tetgen.hpp"
 
@@ -87,7 +88,19 @@ std::unique_ptr<Partition> make_partition(const JobConfig& config, std::unique_p
         if (config.attribute) throw Error("a node attribute as the field needs a mesh");
         return std::make_unique<LatticePartition>(config.lattice, config.domains, std::move(field));
     }
-    return partition_mesh(TetgenSource{config.mesh, config.attribute, field.get()}, config.partition, config.domains);
+    if (!config.array.empty() && config.mesh.empty()) throw Error("a point array as the field needs a mesh");
+    MeshSource source{config.mesh, config.attribute, config.array, config.node_ids, field.get()};
+    // A .pvtu is a decomposition already: its pieces are the domains, each
+    // read only by the rank that runs its task.
+    if (mesh_format(config.mesh) == MeshFormat::pvtu && config.partition.empty()) {
+        if (config.attribute) throw Error(config.mesh.string() + ": --attribute applies to TetGen meshes; name a point array with --array");
+        auto pieces = std::make_unique<PvtuPartition>(source, std::move(field), config.ranks);
+        if (config.domains != 0 && config.domains != pieces->domain_count())
+            throw Error(config.mesh.string() + ": " + std::to_string(pieces->domain_count()) + " pieces, where " +
+                        std::to_string(config.domains) + " domains were asked for (the pieces are the domains)");
+        return pieces;
+    }
+    return partition_mesh(source, config.partition, config.domains);
 }
 
 } // namespace
@@ -101,7 +114,7 @@ Job::Job(const JobConfig& config) : config_(config) {
     std::unique_ptr<Field> field = make_field(config.field);
     // An attribute has no level of its own; an analytic field does, and a
     // split mesh keeps the one it was written with.
-    double default_level = config.attribute ? 0.0 : field->default_level();
+    double default_level = config.attribute || !config.array.empty() ? 0.0 : field->default_level();
     partition_ = make_partition(config, std::move(field));
     if (const auto* split = dynamic_cast<const SplitMeshPartition*>(partition_.get())) default_level = split->default_level();
     const double level = config.level.value_or(default_level);

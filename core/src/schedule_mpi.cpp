@@ -27,6 +27,7 @@
 #include <cstdio>
 #include <cstring>
 #include <deque>
+#include <limits>
 #include <map>
 #include <thread>
 
@@ -647,6 +648,39 @@ bool MpiSession::all(bool value) const {
     return every != 0;
 }
 
+std::vector<std::string> MpiSession::all_gather(const std::string& mine) const {
+    if (!active_ || size_ == 1) return {mine};
+    // Sizes first, -1 for a share too large for MPI's int counts: every rank
+    // then refuses together instead of some waiting for the rest.
+    const long long size = mine.size() < static_cast<std::size_t>(std::numeric_limits<int>::max()) ? static_cast<long long>(mine.size()) : -1;
+    std::vector<long long> sizes(static_cast<std::size_t>(size_));
+    MPI_Allgather(&size, 1, MPI_LONG_LONG, sizes.data(), 1, MPI_LONG_LONG, MPI_COMM_WORLD);
+    long long total = 0;
+    for (const long long s : sizes) {
+        if (s < 0 || total + s >= std::numeric_limits<int>::max())
+            throw Error("the ranks' shares of a .pvtu's scan exceed 2 GB: use fewer pieces per job or split it once with `tetiso split`");
+        total += s;
+    }
+    std::vector<int> counts(sizes.begin(), sizes.end()), offsets(static_cast<std::size_t>(size_), 0);
+    for (int r = 1; r < size_; ++r) offsets[static_cast<std::size_t>(r)] = offsets[static_cast<std::size_t>(r - 1)] + counts[static_cast<std::size_t>(r - 1)];
+    std::string all(static_cast<std::size_t>(total), '\0');
+    MPI_Allgatherv(mine.data(), static_cast<int>(mine.size()), MPI_CHAR, all.data(), counts.data(), offsets.data(), MPI_CHAR,
+                   MPI_COMM_WORLD);
+    std::vector<std::string> shares;
+    for (int r = 0; r < size_; ++r)
+        shares.emplace_back(all, static_cast<std::size_t>(offsets[static_cast<std::size_t>(r)]),
+                            static_cast<std::size_t>(counts[static_cast<std::size_t>(r)]));
+    return shares;
+}
+
+RankGroup MpiSession::group() const {
+    RankGroup group;
+    group.rank = rank_;
+    group.size = size_;
+    if (active_ && size_ > 1) group.all_gather = [this](const std::string& mine) { return all_gather(mine); };
+    return group;
+}
+
 std::optional<JobResult> run_mpi(const Job& job, const Progress& progress) {
     int rank = 0, ranks = 1;
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
@@ -687,6 +721,8 @@ MpiSession::MpiSession() = default;
 MpiSession::~MpiSession() = default;
 bool MpiSession::broadcast(bool value) const { return value; }
 bool MpiSession::all(bool value) const { return value; }
+std::vector<std::string> MpiSession::all_gather(const std::string& mine) const { return {mine}; }
+RankGroup MpiSession::group() const { return {}; }
 } // namespace tetiso
 
 #endif

@@ -35,7 +35,7 @@
 
 #include "tetiso/mesh.hpp"
 #include "tetiso/partition.hpp"
-#include "tetiso/tetgen.hpp"
+#include "tetiso/mesh_file.hpp"
 
 namespace tetiso {
 
@@ -58,16 +58,17 @@ std::vector<std::int32_t> partition_with_metis(const Domain& mesh, int domains);
 
 class MeshPartition;
 
-// The mesh of `source` split by the partition file `partition_file` (its
-// domain count must be `domains` unless that is 0) or, without one, into
-// `domains` parts by METIS. Throws tetiso::Error for a mesh or partition that
-// cannot be read or used, naming the file.
-std::unique_ptr<MeshPartition> partition_mesh(const TetgenSource& source, const std::filesystem::path& partition_file,
+// The mesh of `source` (any format read_mesh reads) split by the partition
+// file `partition_file` (its domain count must be `domains` unless that is
+// 0), or, without one, into `domains` parts by METIS, or, for a .pvtu with
+// neither, into its pieces. Throws tetiso::Error for a mesh or partition
+// that cannot be read or used, naming the file.
+std::unique_ptr<MeshPartition> partition_mesh(const MeshSource& source, const std::filesystem::path& partition_file,
                                               int domains);
 
 class MeshPartition final : public Partition {
 public:
-    // `mesh` is the whole mesh as one domain (read_tetgen); `part` gives each
+    // `mesh` is the whole mesh as one domain (read_mesh); `part` gives each
     // of its tetrahedra a domain id in [0, D), every id used; `source` names
     // where the ids came from, for messages. Throws tetiso::Error if `part`
     // does not fit the mesh.

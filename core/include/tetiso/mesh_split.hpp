@@ -46,13 +46,15 @@
 
 namespace tetiso {
 
-// Writes `partition` to the directory `dir`, which must not exist or be
+// Writes `partition` (a MeshPartition, or a PvtuPartition, which reads one
+// piece at a time, so that a solver's .pvtu is scanned once for many jobs)
+// to the directory `dir`, which must not exist or be
 // empty. `default_level` is the isosurface level a job over the split takes
 // when none is given: the analytic field's own, 0 for a node attribute (the
 // values are stored, the field is not). Everything is written beside `dir`
 // first and renamed at the end: on failure (tetiso::Error naming the path)
 // nothing is left at `dir`.
-void write_mesh_split(const MeshPartition& partition, double default_level, const std::filesystem::path& dir);
+void write_mesh_split(const Partition& partition, double default_level, const std::filesystem::path& dir);
 
 // Throws tetiso::Error unless `dir` is absent or an empty directory: what
 // write_mesh_split requires, to be asked before the work that precedes it.

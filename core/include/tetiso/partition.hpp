@@ -48,6 +48,16 @@ private:
     std::uint64_t value_ = 0xcbf29ce484222325ull;
 };
 
+// The processes that build one partition together, each its share of the
+// work, and how they pool what they found: all_gather takes this rank's
+// bytes and returns every rank's, in rank order, on every rank (a
+// collective call: every rank makes it once). The default is one process.
+struct RankGroup {
+    int rank = 0;
+    int size = 1;
+    std::function<std::vector<std::string>(const std::string&)> all_gather;
+};
+
 class Partition {
 public:
     virtual ~Partition() = default;

@@ -34,14 +34,19 @@ struct JobConfig {
     // an unstructured TetGen mesh (`mesh`, the base name), split by a
     // partition file or, without one, into `domains` parts by METIS.
     std::int64_t lattice = 0;        // N of the N^3 lattice
-    std::filesystem::path mesh;      // TetGen BASE (BASE.node, BASE.ele), instead of the lattice
+    std::filesystem::path mesh;      // a mesh file (mesh_file.hpp: TetGen, .vtu, .pvtu, .msh), instead of the lattice
     std::filesystem::path partition; // with mesh: each tetrahedron's domain, one id per line
     // Or a mesh split into one file per domain (mesh_split.hpp): a rank
     // reads only the domains it works on, and the field and level come with it.
     std::filesystem::path split;
     int domains = 1;                 // D; with a partition file or a split, 0 or its count
     std::string field = "paper";     // built-in name or expression
-    std::optional<int> attribute;    // with mesh: the field is this node attribute instead
+    std::optional<int> attribute;    // with a TetGen mesh: the field is this node attribute instead
+    std::string array;               // with a .vtu, .pvtu or .msh: the field is this point array
+    std::string node_ids;            // with a .pvtu: the point array of global node ids
+    // The processes of an MPI job, which share out the scan of a .pvtu's
+    // pieces (PvtuPartition); the default is one process doing it all.
+    RankGroup ranks;
     std::optional<double> level;     // default: the field's own (0 for an attribute)
     bool reduce = true;              // --no-reduce turns every reduction off
     ReduceOptions reduce_options;    // phi and friends; threads is set per task
@@ -248,6 +253,11 @@ public:
     bool broadcast(bool value) const;
     // Whether `value` is true on every rank, on every rank.
     bool all(bool value) const;
+    // Every rank's `mine`, in rank order, on every rank; throws
+    // tetiso::Error on every rank if any share is 2 GB or more.
+    std::vector<std::string> all_gather(const std::string& mine) const;
+    // This session as a RankGroup (one process where MPI is not running).
+    RankGroup group() const;
 
 private:
     bool active_ = false;

@@ -1,0 +1,106 @@
+// ParaView's partitioned unstructured grid (.pvtu) as a decomposition: each
+// piece (one .vtu per solver rank) is a domain, and pieces are seamed as
+// lattice boxes are, by global node ids, never by coordinates.
+//
+// Before any task, the partition scans every piece once, one at a time (the
+// ranks of a job share the pieces out and pool what they found), and
+// keeps only what lies on its boundary (faces of one of its tetrahedra
+// only): the ids, positions and values of its boundary nodes and the ids of
+// its boundary edges. A node or edge that two pieces share lies on both
+// boundaries, so these tables give the shared edges, the pieces' adjacency,
+// the merge tree (heavy-edge matching, as MeshPartition builds it) and the
+// checks between pieces, in memory of the order of the pieces' surfaces. A
+// task then reads its piece again, alone. Ghost cells (vtkGhostType) are
+// skipped, so pieces do not overlap.
+//
+// Solvers write a shared node from every rank that holds it, and its
+// coordinates need not carry the same bits in each: a shared node takes the
+// position of the first piece (in the .pvtu's order) that holds it, so that
+// every piece places the isosurface vertices on a shared edge identically.
+// Its field values must agree exactly; otherwise the pieces are refused,
+// naming them.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "tetiso/field.hpp"
+#include "tetiso/mesh.hpp"
+#include "tetiso/mesh_file.hpp"
+#include "tetiso/partition.hpp"
+
+namespace tetiso {
+
+// The pieces a .pvtu lists (paths resolved against its directory) and the
+// name of the array its PPointData marks as global ids (empty if none).
+struct PvtuIndex {
+    std::vector<std::filesystem::path> pieces;
+    std::string global_ids;
+};
+
+// Throws tetiso::Error naming the file if it is not a PUnstructuredGrid with
+// at least one piece. A collection (a time series, as DOLFINx writes
+// NAME.pvtu beside NAME000000.pvtu, ...) stands for its last data set;
+// `depth` counts such steps, of which one is followed.
+PvtuIndex read_pvtu_index(const std::filesystem::path& path, int depth = 0);
+
+class PvtuPartition final : public Partition {
+public:
+    // `source.path` is the .pvtu; the field is `source.array` or, without
+    // one, `source.field` at the nodes. Throws tetiso::Error naming the
+    // file or piece for anything unreadable or inconsistent: a piece
+    // missing or without tetrahedra, several pieces without node ids, a
+    // node id twice in one piece, a shared node with different values.
+    // `field`, where given, is kept and used in place of source.field. The
+    // ranks of `group` (an MPI job's) scan every size-th piece each and pool
+    // their boundaries, so that every piece is read once in all; the
+    // partition is the same for any group.
+    explicit PvtuPartition(const MeshSource& source, std::unique_ptr<Field> field = nullptr,
+                           const RankGroup& group = {});
+    ~PvtuPartition() override;
+
+    int domain_count() const override { return static_cast<int>(source_id_.size()); }
+    const std::vector<int>& neighbours(int domain) const override {
+        return neighbours_.at(static_cast<std::size_t>(domain));
+    }
+    const std::vector<DomainTreeNode>& tree() const override { return tree_; }
+    // For an edge two or more pieces share; empty for any other (a job asks
+    // only about locked vertices, which lie on shared edges).
+    std::vector<int> domains_of_edge(GlobalId a, GlobalId b) const override;
+    // Reads the piece's file again; throws tetiso::Error if it changed since.
+    Domain make_domain(int domain) const override;
+    bool pieces_are_manifold() const override { return false; }
+    std::string domain_name(int domain) const override;
+    double spacing() const override { return spacing_; }
+    std::int64_t node_count() const override { return node_count_; }
+    std::int64_t tet_count() const override { return tet_count_; }
+    std::uint64_t fingerprint() const override { return fingerprint_; }
+
+    // The .pvtu's own index of `domain`'s piece.
+    int source_id(int domain) const { return source_id_.at(static_cast<std::size_t>(domain)); }
+    const std::filesystem::path& piece_path(int domain) const;
+
+private:
+    std::unique_ptr<Field> field_;
+    MeshSource source_;
+    std::string ids_name_;
+    std::vector<std::filesystem::path> pieces_;
+    std::vector<std::uint64_t> piece_digests_;
+    std::vector<int> source_id_;
+    std::vector<DomainTreeNode> tree_;
+    std::vector<std::vector<int>> neighbours_;
+    // Edges held by several pieces, by key, with their domains (sorted).
+    std::vector<EdgeKey> shared_keys_;
+    std::vector<std::int64_t> shared_first_;
+    std::vector<int> shared_domains_;
+    // Nodes held by several pieces, by id, with the position they take.
+    std::vector<GlobalId> shared_nodes_;
+    std::vector<float> shared_xyz_;
+    double spacing_ = 0;
+    std::int64_t node_count_ = 0, tet_count_ = 0;
+    std::uint64_t fingerprint_ = 0;
+};
+
+} // namespace tetiso

@@ -1,0 +1,52 @@
+// Internal: a file's bytes, mapped read-only where it is a regular file
+// (no copy, and pages the reader never touches are never read), else read
+// whole. A 270 MB piece took 0.27-0.31 s to read into a string on the
+// loaded 2-core VM, the time of all its parsing.
+#pragma once
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include "io_formats.hpp"
+#include "tetiso/error.hpp"
+
+namespace tetiso::detail {
+
+class MappedFile {
+public:
+    explicit MappedFile(const std::filesystem::path& path) {
+        const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+        struct stat info {};
+        if (fd >= 0 && ::fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0) {
+            void* at = ::mmap(nullptr, static_cast<std::size_t>(info.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
+            if (at != MAP_FAILED) {
+                map_ = at;
+                size_ = static_cast<std::size_t>(info.st_size);
+            }
+        }
+        if (fd >= 0) ::close(fd);
+        if (!map_) copy_ = read_whole_file(path); // names the file in its errors
+    }
+    ~MappedFile() {
+        if (map_) ::munmap(map_, size_);
+    }
+    MappedFile(const MappedFile&) = delete;
+    MappedFile& operator=(const MappedFile&) = delete;
+
+    std::string_view bytes() const {
+        return map_ ? std::string_view(static_cast<const char*>(map_), size_) : std::string_view(copy_);
+    }
+
+private:
+    void* map_ = nullptr;
+    std::size_t size_ = 0;
+    std::string copy_;
+};
+
+} // namespace tetiso::detail

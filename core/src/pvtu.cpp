@@ -1,0 +1,492 @@
+// A .pvtu's pieces as the domains of a job (see pvtu.hpp): one scan of each
+// piece's boundary for the tables every rank needs, then each piece read
+// again, alone, by the task that extracts it.
+#include "tetiso/pvtu.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numeric>
+#include <tuple>
+
+#include <pugixml.hpp>
+
+#include "io_formats.hpp"
+#include "mapped_file.hpp"
+#include "merge_tree.hpp"
+#include "tetiso/error.hpp"
+#include "tetiso/io_vtu.hpp"
+#include "tetiso/mesh_split.hpp"
+
+namespace tetiso {
+
+PvtuIndex read_pvtu_index(const std::filesystem::path& path, int depth) {
+    const std::string bytes = detail::read_whole_file(path);
+    pugi::xml_document document;
+    const pugi::xml_parse_result parsed = document.load_buffer(bytes.data(), bytes.size());
+    const auto fail = [&path](const std::string& what) { throw Error(path.string() + ": " + what); };
+    if (!parsed) fail(std::string("not well-formed XML (") + parsed.description() + ")");
+    const pugi::xml_node root = document.child("VTKFile");
+    // A time series (DOLFINx names it NAME.pvtu): its last data set.
+    if (root && std::string_view(root.attribute("type").as_string()) == "Collection" && depth == 0) {
+        pugi::xml_node last;
+        for (const pugi::xml_node set : root.child("Collection").children("DataSet")) last = set;
+        const std::filesystem::path file(last.attribute("file").as_string());
+        if (file.empty()) fail("a collection without data sets");
+        return read_pvtu_index(file.is_absolute() ? file : path.parent_path() / file, 1);
+    }
+    if (!root || std::string_view(root.attribute("type").as_string()) != "PUnstructuredGrid")
+        fail("not a VTK PUnstructuredGrid file");
+    const pugi::xml_node grid = root.child("PUnstructuredGrid");
+    PvtuIndex index;
+    index.global_ids = grid.child("PPointData").attribute("GlobalIds").as_string();
+    for (const pugi::xml_node piece : grid.children("Piece")) {
+        const std::string source = piece.attribute("Source").as_string();
+        if (source.empty()) fail("piece " + std::to_string(index.pieces.size()) + " has no Source");
+        const std::filesystem::path file(source);
+        index.pieces.push_back(file.is_absolute() ? file : path.parent_path() / file);
+    }
+    if (index.pieces.empty()) fail("lists no pieces");
+    return index;
+}
+
+namespace {
+
+// A piece as read for a task or the scan: the mesh without ghost cells,
+// its nodes those its tetrahedra use, in id order.
+struct LoadedPiece {
+    MeshArrays arrays;
+    std::vector<std::int32_t> used; // point indices used by tetrahedra, sorted by id
+};
+
+LoadedPiece load_piece(std::string_view bytes, const std::filesystem::path& path, const MeshSource& source,
+                       const std::string& ids_name, bool several) {
+    VtuRequest request;
+    request.array = source.array;
+    request.node_ids = ids_name;
+    request.require_node_ids = several;
+    LoadedPiece piece{parse_vtu(bytes, path.string(), request), {}};
+    MeshArrays& a = piece.arrays;
+    if (a.tets.empty()) throw Error(path.string() + ": the piece has no tetrahedra (besides ghost cells)");
+    if (a.ids.empty()) { // a single piece without ids: its point numbers
+        a.ids.resize(a.x.size());
+        std::iota(a.ids.begin(), a.ids.end(), GlobalId{0});
+    }
+    std::vector<char> is_used(a.x.size(), 0);
+    for (const std::int32_t v : a.tets) is_used[static_cast<std::size_t>(v)] = 1;
+    for (std::size_t v = 0; v < is_used.size(); ++v)
+        if (is_used[v]) piece.used.push_back(static_cast<std::int32_t>(v));
+    std::sort(piece.used.begin(), piece.used.end(), [&a](std::int32_t p, std::int32_t q) {
+        return std::make_pair(a.ids[static_cast<std::size_t>(p)], p) < std::make_pair(a.ids[static_cast<std::size_t>(q)], q);
+    });
+    for (std::size_t i = 1; i < piece.used.size(); ++i) {
+        const auto p = static_cast<std::size_t>(piece.used[i - 1]), q = static_cast<std::size_t>(piece.used[i]);
+        if (a.ids[p] == a.ids[q])
+            throw Error(path.string() + ": node id " + std::to_string(a.ids[p]) + " is given to points " +
+                        std::to_string(p) + " and " + std::to_string(q) + " of one piece");
+    }
+    return piece;
+}
+
+// Calls found(u, v, w) for every face of `tets` that only one tetrahedron
+// has. Faces are bucketed by their smallest corner (a counting sort) and
+// each bucket, a dozen faces or so, sorted on its own: for 23 M faces this
+// is several times faster than sorting them all.
+template <class Found>
+void for_each_boundary_face(const std::vector<std::int32_t>& tets, std::size_t nodes, Found found) {
+    const std::size_t count = tets.size() / 4;
+    std::vector<std::int64_t> first(nodes + 1, 0);
+    const auto face = [&](std::size_t t, int skip, std::int32_t (&f)[3]) {
+        int k = 0;
+        for (int c = 0; c < 4; ++c)
+            if (c != skip) f[k++] = tets[4 * t + static_cast<std::size_t>(c)];
+        if (f[0] > f[1]) std::swap(f[0], f[1]);
+        if (f[1] > f[2]) std::swap(f[1], f[2]);
+        if (f[0] > f[1]) std::swap(f[0], f[1]);
+    };
+    for (std::size_t t = 0; t < count; ++t)
+        for (int skip = 0; skip < 4; ++skip) {
+            std::int32_t f[3];
+            face(t, skip, f);
+            ++first[static_cast<std::size_t>(f[0]) + 1];
+        }
+    for (std::size_t v = 0; v < nodes; ++v) first[v + 1] += first[v];
+    std::vector<std::uint64_t> rest(4 * count); // (middle, largest) corner of each face
+    {
+        std::vector<std::int64_t> fill(first.begin(), first.end() - 1);
+        for (std::size_t t = 0; t < count; ++t)
+            for (int skip = 0; skip < 4; ++skip) {
+                std::int32_t f[3];
+                face(t, skip, f);
+                rest[static_cast<std::size_t>(fill[static_cast<std::size_t>(f[0])]++)] =
+                    static_cast<std::uint64_t>(f[1]) << 32 | static_cast<std::uint32_t>(f[2]);
+            }
+    }
+    for (std::size_t v = 0; v < nodes; ++v) {
+        const auto begin = rest.begin() + first[v], end = rest.begin() + first[v + 1];
+        std::sort(begin, end);
+        for (auto i = begin; i != end;) {
+            auto j = i + 1;
+            while (j != end && *j == *i) ++j;
+            if (j - i == 1)
+                found(static_cast<std::int32_t>(v), static_cast<std::int32_t>(*i >> 32), static_cast<std::int32_t>(*i & 0xffffffffu));
+            i = j;
+        }
+    }
+}
+
+// A node on a piece's boundary, as the scan records it.
+struct BoundaryNode {
+    GlobalId id;
+    int piece;
+    float x, y, z, f;
+    bool operator<(const BoundaryNode& o) const { return std::tie(id, piece) < std::tie(o.id, o.piece); }
+};
+
+} // namespace
+
+namespace {
+
+// What the scan keeps of one piece: counts, its digest, its share of the
+// spacing, and its boundary; or why it could not be read.
+struct PieceScan {
+    std::int64_t tets = 0, used = 0;
+    double edge_sum = 0;
+    std::uint64_t digest = 0;
+    std::vector<BoundaryNode> nodes;
+    std::vector<std::pair<EdgeKey, int>> edges;
+    std::string error;
+};
+
+PieceScan scan_piece(const std::filesystem::path& path, const MeshSource& source, const std::string& ids_name,
+                     bool several, int p) {
+    PieceScan scan;
+    try {
+        const detail::MappedFile file(path);
+        const std::string_view bytes = file.bytes();
+        scan.digest = split_digest(bytes.data(), bytes.size());
+        const LoadedPiece piece = load_piece(bytes, path, source, ids_name, several);
+        const MeshArrays& a = piece.arrays;
+        const std::size_t tets = a.tets.size() / 4;
+        scan.tets = static_cast<std::int64_t>(tets);
+        scan.used = static_cast<std::int64_t>(piece.used.size());
+        // The spacing as mean_edge_length computes it, over float positions.
+        for (std::size_t t = 0; t < tets; ++t)
+            for (int i = 0; i < 4; ++i)
+                for (int j = i + 1; j < 4; ++j) {
+                    const auto u = static_cast<std::size_t>(a.tets[4 * t + static_cast<std::size_t>(i)]);
+                    const auto v = static_cast<std::size_t>(a.tets[4 * t + static_cast<std::size_t>(j)]);
+                    const double dx = static_cast<float>(a.x[u]) - static_cast<double>(static_cast<float>(a.x[v]));
+                    const double dy = static_cast<float>(a.y[u]) - static_cast<double>(static_cast<float>(a.y[v]));
+                    const double dz = static_cast<float>(a.z[u]) - static_cast<double>(static_cast<float>(a.z[v]));
+                    scan.edge_sum += std::sqrt(dx * dx + dy * dy + dz * dz);
+                }
+        std::vector<std::int32_t> on_boundary;
+        for_each_boundary_face(a.tets, a.x.size(), [&](std::int32_t u, std::int32_t v, std::int32_t w) {
+            const std::int32_t f[3] = {u, v, w};
+            for (int e = 0; e < 3; ++e) {
+                const GlobalId g = a.ids[static_cast<std::size_t>(f[e])];
+                const GlobalId h = a.ids[static_cast<std::size_t>(f[(e + 1) % 3])];
+                scan.edges.push_back({edge_key(g, h), p});
+                on_boundary.push_back(f[e]);
+            }
+        });
+        std::sort(scan.edges.begin(), scan.edges.end());
+        scan.edges.erase(std::unique(scan.edges.begin(), scan.edges.end()), scan.edges.end());
+        std::sort(on_boundary.begin(), on_boundary.end());
+        on_boundary.erase(std::unique(on_boundary.begin(), on_boundary.end()), on_boundary.end());
+        for (const std::int32_t v : on_boundary) {
+            const auto i = static_cast<std::size_t>(v);
+            scan.nodes.push_back({a.ids[i], p, static_cast<float>(a.x[i]), static_cast<float>(a.y[i]),
+                                  static_cast<float>(a.z[i]), a.f.empty() ? 0.0f : static_cast<float>(a.f[i])});
+        }
+    } catch (const Error& e) {
+        scan.error = e.what();
+    }
+    return scan;
+}
+
+// A rank's scans as bytes for RankGroup::all_gather, and back.
+template <class T>
+void put(std::string& out, const T& value) {
+    out.append(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+template <class T>
+void put_array(std::string& out, const std::vector<T>& values) {
+    put(out, static_cast<std::uint64_t>(values.size()));
+    out.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+}
+class Unpacker {
+public:
+    explicit Unpacker(std::string_view bytes) : bytes_(bytes) {}
+    template <class T>
+    T get() {
+        if (bytes_.size() - at_ < sizeof(T)) throw Error("a .pvtu scan's message from another rank is truncated");
+        T value;
+        std::memcpy(&value, bytes_.data() + at_, sizeof(T));
+        at_ += sizeof(T);
+        return value;
+    }
+    template <class T>
+    std::vector<T> get_array() {
+        const auto count = get<std::uint64_t>();
+        if (count > (bytes_.size() - at_) / sizeof(T)) throw Error("a .pvtu scan's message from another rank is truncated");
+        std::vector<T> values(static_cast<std::size_t>(count));
+        std::memcpy(values.data(), bytes_.data() + at_, values.size() * sizeof(T));
+        at_ += values.size() * sizeof(T);
+        return values;
+    }
+    bool done() const { return at_ == bytes_.size(); }
+
+private:
+    std::string_view bytes_;
+    std::size_t at_ = 0;
+};
+
+std::string pack(const std::string& error, const std::vector<std::pair<int, PieceScan>>& scans) {
+    std::string out;
+    put_array(out, std::vector<char>(error.begin(), error.end()));
+    put(out, static_cast<std::uint64_t>(scans.size()));
+    for (const auto& [p, scan] : scans) {
+        put(out, static_cast<std::int64_t>(p));
+        put(out, scan.tets);
+        put(out, scan.used);
+        put(out, scan.edge_sum);
+        put(out, scan.digest);
+        put_array(out, std::vector<char>(scan.error.begin(), scan.error.end()));
+        put_array(out, scan.nodes);
+        std::vector<EdgeKey> keys; // the piece of each is p
+        for (const auto& edge : scan.edges) keys.push_back(edge.first);
+        put_array(out, keys);
+    }
+    return out;
+}
+
+} // namespace
+
+PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> field, const RankGroup& group)
+    : field_(std::move(field)), source_(source) {
+    if (field_) source_.field = field_.get();
+    if (source.array.empty() && !source_.field) throw Error(source.path.string() + ": neither a field nor an array was given");
+    // Every rank takes part in the exchange below whatever goes wrong here,
+    // so that a rank that cannot read its pieces never leaves the others
+    // waiting: what went wrong travels with its share of the scan.
+    std::string index_error;
+    std::vector<std::pair<int, PieceScan>> mine;
+    try {
+        const PvtuIndex index = read_pvtu_index(source.path);
+        pieces_ = index.pieces;
+        ids_name_ = !source.node_ids.empty() ? source.node_ids : index.global_ids;
+        if (pieces_.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max() / 2))
+            throw Error(source.path.string() + ": too many pieces");
+        const int parts = static_cast<int>(pieces_.size());
+        // Each rank scans every size-th piece from its own rank on.
+        for (int p = group.rank; p < parts; p += group.size)
+            mine.emplace_back(p, scan_piece(pieces_[static_cast<std::size_t>(p)], source_, ids_name_, parts > 1, p));
+    } catch (const Error& e) {
+        index_error = e.what();
+    }
+    std::vector<PieceScan> scans(pieces_.size());
+    {
+        const std::vector<std::string> shares =
+            group.all_gather ? group.all_gather(pack(index_error, mine)) : std::vector<std::string>{pack(index_error, mine)};
+        std::vector<std::pair<int, PieceScan>>().swap(mine);
+        std::string first_error;
+        for (const std::string& share : shares) {
+            Unpacker in(share);
+            const auto error = in.get_array<char>();
+            if (!error.empty() && first_error.empty()) first_error.assign(error.begin(), error.end());
+            const auto count = in.get<std::uint64_t>();
+            for (std::uint64_t k = 0; k < count; ++k) {
+                const auto p = in.get<std::int64_t>();
+                if (p < 0 || static_cast<std::size_t>(p) >= scans.size()) throw Error("a .pvtu scan's message names piece " + std::to_string(p));
+                PieceScan& scan = scans[static_cast<std::size_t>(p)];
+                scan.tets = in.get<std::int64_t>();
+                scan.used = in.get<std::int64_t>();
+                scan.edge_sum = in.get<double>();
+                scan.digest = in.get<std::uint64_t>();
+                const auto piece_error = in.get_array<char>();
+                scan.error.assign(piece_error.begin(), piece_error.end());
+                scan.nodes = in.get_array<BoundaryNode>();
+                for (const EdgeKey key : in.get_array<EdgeKey>()) scan.edges.push_back({key, static_cast<int>(p)});
+            }
+        }
+        if (!first_error.empty()) throw Error(first_error);
+        // The first piece, in the file's order, that could not be read.
+        for (const PieceScan& scan : scans)
+            if (!scan.error.empty()) throw Error(scan.error);
+    }
+    const int parts = static_cast<int>(pieces_.size());
+
+    std::vector<std::int64_t> part_tets(pieces_.size());
+    std::vector<std::pair<EdgeKey, int>> boundary_edges;
+    std::vector<BoundaryNode> boundary_nodes;
+    double edge_sum = 0; // piece by piece in the file's order, for any number of ranks
+    std::int64_t used_nodes = 0;
+    for (int p = 0; p < parts; ++p) {
+        PieceScan& scan = scans[static_cast<std::size_t>(p)];
+        part_tets[static_cast<std::size_t>(p)] = scan.tets;
+        tet_count_ += scan.tets;
+        used_nodes += scan.used;
+        edge_sum += scan.edge_sum;
+        piece_digests_.push_back(scan.digest);
+        boundary_edges.insert(boundary_edges.end(), scan.edges.begin(), scan.edges.end());
+        boundary_nodes.insert(boundary_nodes.end(), scan.nodes.begin(), scan.nodes.end());
+        scan = PieceScan();
+    }
+    std::sort(boundary_edges.begin(), boundary_edges.end());
+    spacing_ = edge_sum / static_cast<double>(6 * tet_count_);
+
+    // Shared nodes: the first piece's position; values that must agree.
+    std::sort(boundary_nodes.begin(), boundary_nodes.end());
+    node_count_ = used_nodes;
+    for (std::size_t i = 0; i < boundary_nodes.size();) {
+        std::size_t j = i + 1;
+        while (j < boundary_nodes.size() && boundary_nodes[j].id == boundary_nodes[i].id) ++j;
+        if (j - i > 1) {
+            const BoundaryNode& first = boundary_nodes[i];
+            node_count_ -= static_cast<std::int64_t>(j - i - 1);
+            for (std::size_t k = i + 1; k < j && !source.array.empty(); ++k)
+                if (boundary_nodes[k].f != first.f)
+                    throw Error(pieces_[static_cast<std::size_t>(boundary_nodes[k].piece)].string() + ": node id " +
+                                std::to_string(first.id) + " has value " + std::to_string(boundary_nodes[k].f) +
+                                " of '" + source.array + "', where " +
+                                pieces_[static_cast<std::size_t>(first.piece)].string() + " gives it " +
+                                std::to_string(first.f));
+            shared_nodes_.push_back(first.id);
+            shared_xyz_.insert(shared_xyz_.end(), {first.x, first.y, first.z});
+        }
+        i = j;
+    }
+    std::vector<BoundaryNode>().swap(boundary_nodes);
+
+    // Shared edges, the pieces' adjacency and the tree.
+    detail::PairWeights weights;
+    std::vector<int> shared_source;
+    shared_first_.push_back(0);
+    for (std::size_t i = 0; i < boundary_edges.size();) {
+        std::size_t j = i + 1;
+        while (j < boundary_edges.size() && boundary_edges[j].first == boundary_edges[i].first) ++j;
+        if (j - i > 1) {
+            shared_keys_.push_back(boundary_edges[i].first);
+            for (std::size_t a = i; a < j; ++a) {
+                shared_source.push_back(boundary_edges[a].second);
+                for (std::size_t b = a + 1; b < j; ++b) ++weights[{boundary_edges[a].second, boundary_edges[b].second}];
+            }
+            shared_first_.push_back(static_cast<std::int64_t>(shared_source.size()));
+        }
+        i = j;
+    }
+    std::vector<std::pair<EdgeKey, int>>().swap(boundary_edges);
+    detail::build_merge_tree(part_tets, weights, tree_, source_id_);
+    std::vector<int> domain_of_source(pieces_.size());
+    for (int d = 0; d < parts; ++d) domain_of_source[static_cast<std::size_t>(source_id_[static_cast<std::size_t>(d)])] = d;
+    neighbours_.resize(pieces_.size());
+    for (const auto& [pq, weight] : weights) {
+        const int a = domain_of_source[static_cast<std::size_t>(pq.first)], b = domain_of_source[static_cast<std::size_t>(pq.second)];
+        neighbours_[static_cast<std::size_t>(a)].push_back(b);
+        neighbours_[static_cast<std::size_t>(b)].push_back(a);
+    }
+    for (auto& n : neighbours_) std::sort(n.begin(), n.end());
+    shared_domains_.resize(shared_source.size());
+    for (std::size_t e = 0; e + 1 < shared_first_.size(); ++e) {
+        const auto first = shared_domains_.begin() + shared_first_[e], last = shared_domains_.begin() + shared_first_[e + 1];
+        std::transform(shared_source.begin() + shared_first_[e], shared_source.begin() + shared_first_[e + 1], first,
+                       [&](int p) { return domain_of_source[static_cast<std::size_t>(p)]; });
+        std::sort(first, last);
+    }
+
+    fingerprint_ = Digest()
+                       .add(node_count_)
+                       .add(tet_count_)
+                       .add(source_id_.data(), source_id_.size())
+                       .add(shared_keys_.data(), shared_keys_.size())
+                       .add(piece_digests_.data(), piece_digests_.size())
+                       .add(source.field_description())
+                       .value();
+}
+
+PvtuPartition::~PvtuPartition() = default;
+
+const std::filesystem::path& PvtuPartition::piece_path(int domain) const {
+    return pieces_.at(static_cast<std::size_t>(source_id(domain)));
+}
+
+std::string PvtuPartition::domain_name(int domain) const {
+    return "domain " + std::to_string(domain) + " (piece " + std::to_string(source_id(domain)) + ", " +
+           piece_path(domain).string() + ")";
+}
+
+std::vector<int> PvtuPartition::domains_of_edge(GlobalId a, GlobalId b) const {
+    if (a < 0 || b < 0 || a > kMaxGlobalId || b > kMaxGlobalId) return {};
+    const EdgeKey key = edge_key(a, b);
+    const auto found = std::lower_bound(shared_keys_.begin(), shared_keys_.end(), key);
+    if (found == shared_keys_.end() || *found != key) return {};
+    const auto e = static_cast<std::size_t>(found - shared_keys_.begin());
+    return {shared_domains_.begin() + shared_first_[e], shared_domains_.begin() + shared_first_[e + 1]};
+}
+
+Domain PvtuPartition::make_domain(int domain) const {
+    if (domain < 0 || domain >= domain_count())
+        throw Error("no domain " + std::to_string(domain) + " in " + source_.path.string() + " of " +
+                    std::to_string(domain_count()));
+    const int p = source_id(domain);
+    const std::filesystem::path& path = pieces_[static_cast<std::size_t>(p)];
+    const detail::MappedFile file(path);
+    const std::string_view bytes = file.bytes();
+    if (split_digest(bytes.data(), bytes.size()) != piece_digests_[static_cast<std::size_t>(p)])
+        throw Error(path.string() + ": the piece changed after the job first read it");
+    const LoadedPiece piece = load_piece(bytes, path, source_, ids_name_, pieces_.size() > 1);
+    const MeshArrays& a = piece.arrays;
+
+    Domain out;
+    out.id = domain;
+    const std::size_t n = piece.used.size();
+    std::vector<std::int32_t> local(a.x.size(), -1);
+    std::vector<double> px(n), py(n), pz(n);
+    out.gid.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto v = static_cast<std::size_t>(piece.used[i]);
+        local[v] = static_cast<std::int32_t>(i);
+        const GlobalId id = a.ids[v];
+        out.gid[i] = id;
+        float x = static_cast<float>(a.x[v]), y = static_cast<float>(a.y[v]), z = static_cast<float>(a.z[v]);
+        const auto shared = std::lower_bound(shared_nodes_.begin(), shared_nodes_.end(), id);
+        if (shared != shared_nodes_.end() && *shared == id) {
+            const auto s = 3 * static_cast<std::size_t>(shared - shared_nodes_.begin());
+            x = shared_xyz_[s], y = shared_xyz_[s + 1], z = shared_xyz_[s + 2];
+        }
+        px[i] = x, py[i] = y, pz[i] = z;
+    }
+    out.x.assign(px.begin(), px.end());
+    out.y.assign(py.begin(), py.end());
+    out.z.assign(pz.begin(), pz.end());
+    out.f.resize(n);
+    if (!source_.array.empty()) {
+        for (std::size_t i = 0; i < n; ++i) out.f[i] = static_cast<float>(a.f[static_cast<std::size_t>(piece.used[i])]);
+    } else {
+        // At the positions every piece agrees on, so shared nodes get one value.
+        source_.field->evaluate(px.data(), py.data(), pz.data(), n, out.f.data());
+    }
+    out.tets.resize(a.tets.size());
+    for (std::size_t i = 0; i < a.tets.size(); ++i) out.tets[i] = local[static_cast<std::size_t>(a.tets[i])];
+    for (std::size_t t = 0; t < out.tet_count(); ++t) {
+        std::int32_t* v = out.tets.data() + 4 * t;
+        if (negatively_oriented(out, v[0], v[1], v[2], v[3])) std::swap(v[2], v[3]);
+    }
+    out.interface.assign(n, 0);
+    for (std::size_t e = 0; e < shared_keys_.size(); ++e) {
+        const auto first = shared_domains_.begin() + shared_first_[e], last = shared_domains_.begin() + shared_first_[e + 1];
+        if (!std::binary_search(first, last, domain)) continue;
+        out.shared_edges.push_back(shared_keys_[e]);
+        for (const GlobalId g : {edge_key_low(shared_keys_[e]), edge_key_high(shared_keys_[e])}) {
+            const auto at = std::lower_bound(out.gid.begin(), out.gid.end(), g);
+            out.interface[static_cast<std::size_t>(at - out.gid.begin())] = 1;
+        }
+    }
+    return out;
+}
+
+} // namespace tetiso
