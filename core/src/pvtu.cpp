@@ -216,7 +216,7 @@ void put(std::string& out, const T& value) {
 template <class T>
 void put_array(std::string& out, const std::vector<T>& values) {
     put(out, static_cast<std::uint64_t>(values.size()));
-    out.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+    if (!values.empty()) out.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
 }
 class Unpacker {
 public:
@@ -234,6 +234,7 @@ public:
         const auto count = get<std::uint64_t>();
         if (count > (bytes_.size() - at_) / sizeof(T)) throw Error("a .pvtu scan's message from another rank is truncated");
         std::vector<T> values(static_cast<std::size_t>(count));
+        if (count == 0) return values; // memcpy takes no null pointer, even for 0 bytes
         std::memcpy(values.data(), bytes_.data() + at_, values.size() * sizeof(T));
         at_ += values.size() * sizeof(T);
         return values;
