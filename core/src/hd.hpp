@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 
 #ifdef __CUDACC__
 #define TETISO_HD __host__ __device__
@@ -28,23 +29,28 @@ namespace tetiso::hd {
 // count), never the order of other memory operations around them. The host
 // side uses GCC's builtins, which C++17 code may call (std::atomic_ref is
 // C++20).
-TETISO_HD inline void atomic_min(std::int32_t* at, std::int32_t value) {
-#ifdef __CUDA_ARCH__
-    atomicMin(at, value);
-#else
-    std::int32_t seen = __atomic_load_n(at, __ATOMIC_RELAXED);
-    while (value < seen && !__atomic_compare_exchange_n(at, &seen, value, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+#ifndef __CUDA_ARCH__
+// *at = value where better(value, *at), by compare-and-swap.
+template <class T, class Better>
+inline void replace_if(T* at, T value, const Better& better) {
+    T seen = __atomic_load_n(at, __ATOMIC_RELAXED);
+    while (better(value, seen) &&
+           !__atomic_compare_exchange_n(at, &seen, value, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
     }
-#endif
 }
+#endif
 
-TETISO_HD inline void atomic_min(std::uint64_t* at, std::uint64_t value) {
+// For int32 and uint64 (the types CUDA's atomics take).
+template <class T>
+TETISO_HD inline void atomic_min(T* at, T value) {
+    static_assert(std::is_same_v<T, std::int32_t> || std::is_same_v<T, std::uint64_t>);
 #ifdef __CUDA_ARCH__
-    atomicMin(reinterpret_cast<unsigned long long*>(at), static_cast<unsigned long long>(value));
+    if constexpr (std::is_same_v<T, std::uint64_t>)
+        atomicMin(reinterpret_cast<unsigned long long*>(at), static_cast<unsigned long long>(value));
+    else
+        atomicMin(at, value);
 #else
-    std::uint64_t seen = __atomic_load_n(at, __ATOMIC_RELAXED);
-    while (value < seen && !__atomic_compare_exchange_n(at, &seen, value, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
-    }
+    replace_if(at, value, [](T a, T b) { return a < b; });
 #endif
 }
 
@@ -52,9 +58,7 @@ TETISO_HD inline void atomic_max(std::uint64_t* at, std::uint64_t value) {
 #ifdef __CUDA_ARCH__
     atomicMax(reinterpret_cast<unsigned long long*>(at), static_cast<unsigned long long>(value));
 #else
-    std::uint64_t seen = __atomic_load_n(at, __ATOMIC_RELAXED);
-    while (value > seen && !__atomic_compare_exchange_n(at, &seen, value, true, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
-    }
+    replace_if(at, value, [](std::uint64_t a, std::uint64_t b) { return a > b; });
 #endif
 }
 
