@@ -835,34 +835,47 @@ TEST(Reduce, ThreadsOfferedBetweenRoundsChangeNothing) {
 // the host sweeps in order on one thread and takes windows of a
 // thirty-second on several. The choice, and so the surface, must not
 // depend on how it is made: here on the host, where CI runs it, with windows
-// of one operation up to all of them.
-TEST(Reduce, ChoosingByReservationsAsTheGpuDoesGivesTheSameBytes) {
-    for (const char* field : {"paper", "gyroid"})
-        for (const int domains : {1, 8}) {
-            // The whole surface, or one domain's piece, its interface locked.
-            const Lattice lattice(40);
-            const Decomposition decomposition(lattice, domains);
-            const auto f = make_field(field);
-            const Piece in = extract(decomposition.make_domain(domains - 1, *f), static_cast<float>(f->default_level()));
-            ReduceOptions o;
-            o.max_error = 0.25 * lattice.spacing();
-            o.keep_samples = true;
-            const Piece swept = reduce(in, o);
-            EXPECT_EQ(domains > 1, std::count(in.flags.begin(), in.flags.end(), kLocked) > 0);
-            EXPECT_LT(swept.triangle_count(), in.triangle_count());
-            for (const bool speculate : {false, true})
-                for (const long window : {1L, 5L, 1000L, 0L, 1L << 30})
-                    for (const int threads : {1, 2}) {
-                        // Speculation tests every operation of a round first:
-                        // the window and thread count change nothing more.
-                        if (speculate && (threads == 1 || window == 1L || window == 1000L)) continue;
-                        o.threads = threads;
-                        EXPECT_TRUE(identical(swept, detail::reduce_by_reservations(in, o, window, speculate)))
-                            << field << ", " << domains << " domains, window " << window << ", " << threads
-                            << " threads" << (speculate ? ", speculating" : "");
-                    }
+// of one operation up to all of them. One case per surface (the whole one,
+// or one domain's piece with its interface locked), each its own test.
+struct ReservationCase {
+    const char* field;
+    int domains;
+};
+
+class ChoosingByReservations : public ::testing::TestWithParam<ReservationCase> {};
+
+TEST_P(ChoosingByReservations, GivesTheSweepsBytes) {
+    const ReservationCase c = GetParam();
+    const Lattice lattice(40);
+    const Decomposition decomposition(lattice, c.domains);
+    const auto f = make_field(c.field);
+    const Piece in = extract(decomposition.make_domain(c.domains - 1, *f), static_cast<float>(f->default_level()));
+    ReduceOptions o;
+    o.max_error = 0.25 * lattice.spacing();
+    o.keep_samples = true;
+    const Piece swept = reduce(in, o);
+    EXPECT_EQ(c.domains > 1, std::count(in.flags.begin(), in.flags.end(), kLocked) > 0);
+    EXPECT_LT(swept.triangle_count(), in.triangle_count());
+    for (const long window : {1L, 5L, 1000L, 0L, 1L << 30})
+        for (const int threads : {1, 2}) {
+            o.threads = threads;
+            EXPECT_TRUE(identical(swept, detail::reduce_by_reservations(in, o, window, false)))
+                << "window " << window << ", " << threads << " threads";
         }
+    // Speculation tests every operation of a round first: the window and the
+    // thread count change nothing more.
+    o.threads = 2;
+    for (const long window : {5L, 1L << 30})
+        EXPECT_TRUE(identical(swept, detail::reduce_by_reservations(in, o, window, true)))
+            << "window " << window << ", speculating";
 }
+
+INSTANTIATE_TEST_SUITE_P(Surfaces, ChoosingByReservations,
+                         ::testing::Values(ReservationCase{"paper", 1}, ReservationCase{"paper", 8},
+                                           ReservationCase{"gyroid", 1}, ReservationCase{"gyroid", 8}),
+                         [](const ::testing::TestParamInfo<ReservationCase>& info) {
+                             return std::string(info.param.field) + "_" + std::to_string(info.param.domains);
+                         });
 
 } // namespace
 } // namespace tetiso
