@@ -101,7 +101,8 @@ TEST_F(Files, OtherToolsDataOfTheSamePlainNamesIsNotTetisos) {
 
     // The same in VTP: tetiso's arrays renamed to the plain names, which
     // keeps every array's bytes (and so its offsets) as they were.
-    Piece piece = extract(Decomposition(Lattice(20), 2).make_domain(1, *make_field("gyroid")), 0.0f);
+    const Lattice lattice(20);
+    Piece piece = extract(Decomposition(lattice, 2).make_domain(1, *make_field("gyroid")), 0.0f);
     ASSERT_GT(std::count(piece.flags.begin(), piece.flags.end(), kLocked), 0);
     piece.error.assign(piece.triangle_count(), 0.5f);
     write_piece(piece, at("own.vtp"));

@@ -62,8 +62,11 @@ private:
 // cells in proportion, so domains differ in size by about one slab of cells.
 class Decomposition {
 public:
-    // Throws tetiso::Error if d < 1 or d exceeds the number of cells.
+    // Throws tetiso::Error if d < 1 or d exceeds the number of cells. The
+    // lattice must outlive the decomposition, which refers to it: a
+    // temporary lattice is refused at compile time.
     Decomposition(const Lattice& lattice, int d);
+    Decomposition(Lattice&&, int) = delete;
 
     const Lattice& lattice() const { return lattice_; }
     int domain_count() const { return static_cast<int>(boxes_.size()); }
