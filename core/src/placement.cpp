@@ -1,5 +1,5 @@
 // Placing a job's tasks on one node's devices (placement.hpp).
-#include "placement.hpp"
+#include "tetiso/placement.hpp"
 
 #include <algorithm>
 #include <regex>

@@ -8,7 +8,7 @@
 #include <cstdlib>
 #include <limits>
 
-#include "placement.hpp"
+#include "tetiso/placement.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/gpu.hpp"

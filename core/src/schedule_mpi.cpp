@@ -31,7 +31,7 @@
 #include <map>
 #include <thread>
 
-#include "placement.hpp"
+#include "tetiso/placement.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/gpu.hpp"
 

@@ -8,7 +8,9 @@
 #include <random>
 
 #include "tetiso/error.hpp"
+#include "tetiso/placement.hpp"
 #include "tetiso/resources.hpp"
+#include "tetiso/schedule.hpp"
 
 using namespace tetiso;
 
@@ -210,4 +212,42 @@ TEST(ResourceManager, RefusesATaskNoDeviceCanHold) {
     ResourceManager manager({cpu(1), gpu(0, 100)});
     EXPECT_THROW(manager.request({kDomain, 10, {0, 200}}, 0), Error);
     EXPECT_THROW(ResourceManager({}), Error);
+}
+
+// A node's devices and a job's requests (placement.hpp): the CPU holds the
+// node's workers; a GPU the memory left after each process's context, and
+// none where that leaves too little; a domain task may go anywhere, a seam
+// only to the CPU.
+TEST(NodePlacement, DevicesAndRequestsOfAJob) {
+    JobConfig config;
+    config.lattice = 21;
+    config.domains = 8;
+    const Job job(config);
+    const NodePlacement cpu_only(job, 3, 0, 0.0);
+    ASSERT_EQ(cpu_only.manager.devices().size(), 1u);
+    EXPECT_DOUBLE_EQ(cpu_only.manager.devices()[0].capacity, 3.0);
+
+    const NodePlacement two_gpus(job, 3, 2, 16000.0);
+    ASSERT_EQ(two_gpus.manager.devices().size(), 3u);
+    EXPECT_EQ(two_gpus.gpu_of(0), -1);
+    EXPECT_EQ(two_gpus.gpu_of(2), 1);
+    EXPECT_DOUBLE_EQ(two_gpus.manager.devices()[1].capacity, 16000.0 * 0.95 - 3 * kGpuContextMiB);
+
+    const int domain_task = job.task_count() - 1; // leaves come last (task_tree)
+    ASSERT_EQ(job.kind(domain_task), TaskKind::domain);
+    const ResourceRequest domain = two_gpus.request(domain_task, nullptr, nullptr);
+    EXPECT_EQ(domain.units[0], 1.0);
+    EXPECT_GT(domain.units[1], kGpuTaskMarginMiB);
+    EXPECT_EQ(domain.units[1], domain.units[2]);
+    EXPECT_DOUBLE_EQ(domain.size, static_cast<double>(job.partition().tet_count()) / 8);
+
+    ASSERT_EQ(job.kind(0), TaskKind::seam);
+    Piece left, right;
+    left.triangles = {0, 1, 2};
+    right.triangles = {0, 1, 2, 0, 2, 3};
+    const ResourceRequest seam = two_gpus.request(0, &left, &right);
+    EXPECT_EQ(seam.units, (std::vector<double>{1, 0, 0}));
+    EXPECT_DOUBLE_EQ(seam.size, 3.0);
+
+    EXPECT_EQ(NodePlacement(job, 8, 1, 4000.0).manager.devices().size(), 1u); // 8 contexts leave no room
 }
