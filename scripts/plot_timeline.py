@@ -6,7 +6,11 @@ merge, region, reduction and splice, in colours of their own (reports
 without stages, or with a seam's single "seam" stage, give one bar per task
 or per seam). The legend gives each stage's total seconds over all tasks. A task that ran with more
 than one thread (cores lent by idle workers) is labelled with the most it
-had, e.g. "x4".
+had, e.g. "x4". A strip along the bottom of each bar gives the device the
+task ran on (the report's "device": the CPU, or a GPU of the rank's node),
+each device in a colour of its own, with its task count and seconds in the
+legend; a task that waited for its device's grant is preceded by a thin
+line of that length.
 
     scripts/plot_timeline.py report.json -o timeline.png
 """
@@ -58,8 +62,28 @@ def main():
             colours[label] = colour
             totals[label] = totals.get(label, 0.0) + stages[stage]
             at += width
+    # Where each task ran: the CPU in grey, the GPUs in colours the stages
+    # do not use.
+    device_palette = ["tab:purple", "tab:cyan", "gold", "black", "lime", "navy", "magenta", "teal"]
+    devices = sorted({t.get("device", "cpu") for t in tasks}, key=lambda d: (d != "cpu", d))
+    device_colour = {d: ("tab:gray" if d == "cpu" else device_palette[i % len(device_palette)])
+                     for i, d in enumerate(x for x in devices if x != "cpu")}
+    device_colour.setdefault("cpu", "tab:gray")
+    device_totals = {}
+    for t in tasks:
+        device = t.get("device", "cpu")
+        y = row[t["rank"]]
+        ax.barh(y - 0.34, t["end"] - t["start"], left=t["start"], height=0.12, color=device_colour[device], linewidth=0)
+        if t.get("wait_seconds", 0) > 0:
+            ax.plot([t["start"] - t["wait_seconds"], t["start"]], [y - 0.34, y - 0.34], color=device_colour[device],
+                    linewidth=0.6)
+        count, seconds = device_totals.get(device, (0, 0.0))
+        device_totals[device] = (count + 1, seconds + t["end"] - t["start"])
     for label, total in totals.items():
         ax.barh(-10, 0, color=colours[label], label=f"{label} ({total:.1f} s in all)")
+    for device in devices:
+        count, seconds = device_totals[device]
+        ax.barh(-10, 0, color=device_colour[device], label=f"on {device}: {count} tasks, {seconds:.1f} s")
     for t in tasks:
         if t.get("threads", 1) > 1 and t["kind"] == "domain":
             ax.text(t["end"], row[t["rank"]], f" x{t['threads']}", va="center", ha="left", fontsize=7)

@@ -44,9 +44,12 @@ struct DeviceChoice {
     std::string device = "cpu";
     int gpu = 0;
     bool on_gpu() const { return device == "gpu"; }
+    bool automatic() const { return device == "auto"; }
 };
-// what: the work that runs there, for the help text.
-void add_device_options(CLI::App& cmd, DeviceChoice& choice, const std::string& what);
+// what: the work that runs there, for the help text. With `automatic`,
+// --device also takes auto (tetiso run: a resource manager per node places
+// each task), which is then the default.
+void add_device_options(CLI::App& cmd, DeviceChoice& choice, const std::string& what, bool automatic = false);
 
 // The GPU asked for, or null for the CPU; throws tetiso::Error ("--device
 // gpu: why not") when there is none.

@@ -24,6 +24,28 @@ struct RunArguments {
     bool quiet = false;
 };
 
+// Where a task ran: "cpu", or "gpu N" for CUDA device N of its rank's node.
+std::string device_name(const TaskRecord& t) {
+    return t.stages.gpu < 0 ? std::string("cpu") : "gpu " + std::to_string(t.stages.gpu);
+}
+
+// What each device took: its tasks, their seconds, their input triangles
+// (the work: a domain's extracted triangles, a seam's two pieces'), and the
+// seconds they waited for a grant; devices by name.
+nlohmann::json device_summary(const std::vector<TaskRecord>& tasks) {
+    nlohmann::json summary = nlohmann::json::object();
+    for (const TaskRecord& t : tasks) {
+        nlohmann::json& d = summary[device_name(t)];
+        if (d.is_null()) d = {{"tasks", 0}, {"domain_tasks", 0}, {"seconds", 0.0}, {"triangles_in", 0}, {"wait_seconds", 0.0}};
+        d["tasks"] = d["tasks"].get<int>() + 1;
+        if (t.kind == TaskKind::domain) d["domain_tasks"] = d["domain_tasks"].get<int>() + 1;
+        d["seconds"] = d["seconds"].get<double>() + (t.end - t.start);
+        d["triangles_in"] = d["triangles_in"].get<std::uint64_t>() + t.triangles_in;
+        d["wait_seconds"] = d["wait_seconds"].get<double>() + t.wait_seconds;
+    }
+    return summary;
+}
+
 nlohmann::json task_json(const TaskRecord& t) {
     nlohmann::json stages;
     if (t.kind == TaskKind::domain)
@@ -49,6 +71,9 @@ nlohmann::json task_json(const TaskRecord& t) {
             {"triangles_in", t.triangles_in},
             {"triangles_out", t.triangles_out},
             {"samples_out", t.samples_out},
+            {"device", device_name(t)},
+            {"predicted_seconds", t.predicted_seconds},
+            {"wait_seconds", t.wait_seconds},
             {"stage_seconds", stages}};
 }
 
@@ -159,7 +184,9 @@ void run_job(const RunArguments& args) {
         {"ranks", mpi.size()},
         {"workers", std::max(1, mpi.size() - 1)},
         {"threads", c.threads},
-        {"device", c.device == JobConfig::Device::gpu ? "gpu " + std::to_string(c.gpu) : std::string("cpu")},
+        {"device", c.device == JobConfig::Device::gpu ? "gpu " + std::to_string(c.gpu)
+                   : c.device == JobConfig::Device::automatic ? std::string("auto") : std::string("cpu")},
+        {"devices", device_summary(result->tasks)},
         {"spacing", partition.spacing()},
         {"nodes", partition.node_count()},
         {"tets", partition.tet_count()},
@@ -234,9 +261,11 @@ void add_run_command(CLI::App& app, Command& run) {
     cmd->add_option("-o,--output", args->output, "Output surface, .ply or .vtp")->required();
     cmd->add_option("--report", args->report, "Write a JSON report (totals and one record per task) here");
     cmd->add_flag("--quiet", args->quiet, "No progress lines on stderr");
-    add_device_options(*cmd, args->device, "the domain tasks (extraction and reduction; seams stay on the CPU)");
+    add_device_options(*cmd, args->device, "the domain tasks (extraction and reduction; seams stay on the CPU)", true);
     cmd->callback([&run, args, domains] {
-        args->job.device = args->device.on_gpu() ? JobConfig::Device::gpu : JobConfig::Device::cpu;
+        args->job.device = args->device.on_gpu()      ? JobConfig::Device::gpu
+                           : args->device.automatic() ? JobConfig::Device::automatic
+                                                      : JobConfig::Device::cpu;
         args->job.gpu = args->device.gpu;
         if (args->job.lattice == 0 && args->job.mesh.empty() && args->job.split.empty())
             throw CLI::ValidationError("give --lattice N, --mesh BASE or --split DIR");

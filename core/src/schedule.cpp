@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <limits>
 
+#include "tetiso/placement.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/gpu.hpp"
@@ -131,9 +132,10 @@ Job::Job(const JobConfig& config) : config_(config) {
 
 Job::~Job() = default;
 
-Piece Job::execute_on_gpu(int domain, TaskRecord& record, const ReduceOptions& options) const {
-    if (!gpu_) gpu_ = std::make_unique<Gpu>(config_.gpu);
-    Gpu& gpu = *gpu_;
+Piece Job::execute_on_gpu(int domain, int gpu_index, TaskRecord& record, const ReduceOptions& options) const {
+    std::unique_ptr<Gpu>& made = gpus_[gpu_index];
+    if (!made) made = std::make_unique<Gpu>(gpu_index);
+    Gpu& gpu = *made;
     const auto* lattice = dynamic_cast<const LatticePartition*>(partition_.get());
     const auto start = std::chrono::steady_clock::now();
     Piece piece;
@@ -200,10 +202,11 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
         t0 = t1;
         return s;
     };
-    if (n.count == 1 && config_.device == JobConfig::Device::gpu) {
+    const int gpu = threads.gpu ? *threads.gpu : config_.device == JobConfig::Device::gpu ? config_.gpu : -1;
+    if (n.count == 1 && gpu >= 0) {
         ReduceOptions options = reduce_options(threads);
         options.keep_samples = true;
-        Piece piece = execute_on_gpu(n.first, record, options);
+        Piece piece = execute_on_gpu(n.first, gpu, record, options);
         if (config_.reduce) keep_samples_near_locked(piece, config_.sample_rings);
         record.triangles_out = piece.triangle_count();
         record.samples_out = piece.sample_count();
@@ -294,6 +297,11 @@ JobResult run_local(const Job& job, const Progress& progress) {
     std::vector<std::optional<Piece>> pieces(static_cast<std::size_t>(job.task_count()));
     JobResult result;
     int done = 0;
+    std::optional<NodePlacement> placement;
+    if (job.config().device == JobConfig::Device::automatic) {
+        const int gpus = gpu_count();
+        placement.emplace(job, 1, gpus, gpus > 0 ? gpu_memory_mib(0) : 0.0);
+    }
     while (!queue.finished()) {
         const int task = queue.pop();
         const TaskNode& n = job.node(task);
@@ -301,8 +309,18 @@ JobResult run_local(const Job& job, const Progress& progress) {
         record.start = seconds();
         const Piece* left = n.left >= 0 ? &*pieces[static_cast<std::size_t>(n.left)] : nullptr;
         const Piece* right = n.right >= 0 ? &*pieces[static_cast<std::size_t>(n.right)] : nullptr;
+        TaskThreads threads{job.config().threads, {}, {}};
+        // One process runs one task at a time: every grant starts at once,
+        // and the choice is the device predicted fastest.
+        Grant grant;
+        if (placement) {
+            grant = placement->manager.request(placement->request(task, left, right), seconds());
+            placement->manager.start(grant.ticket, seconds());
+            threads.gpu = placement->gpu_of(grant.device);
+            record.predicted_seconds = grant.predicted_seconds;
+        }
         try {
-            pieces[static_cast<std::size_t>(task)] = job.execute(task, left, right, record, TaskThreads{job.config().threads, {}});
+            pieces[static_cast<std::size_t>(task)] = job.execute(task, left, right, record, threads);
         } catch (const Error& e) {
             throw Error("task '" + job.describe(task) + "' failed: " + e.what());
         } catch (const std::bad_alloc&) {
@@ -313,6 +331,10 @@ JobResult run_local(const Job& job, const Progress& progress) {
             pieces[static_cast<std::size_t>(n.right)].reset();
         }
         record.end = seconds();
+        if (placement) {
+            const double transfer = record.stages.upload + record.stages.download;
+            placement->manager.finish(grant.ticket, std::max(0.0, record.end - record.start - transfer), transfer);
+        }
         result.tasks.push_back(record);
         queue.complete(task);
         if (progress) progress(++done, job.task_count(), seconds());

@@ -4,7 +4,7 @@
 // piece it made, which also says it is ready again. Tasks go to whichever
 // worker asks first: load balances itself, the output does not depend on it.
 // The seams at the end of the job, which nothing can run beside, rank 0 runs
-// itself, with threads on the cores of the workers left idle (see control()).
+// itself, with threads on the cores of the workers left idle (see Controller).
 //
 // Failure: a task that throws, on a worker or on rank 0, is reported to rank
 // 0, which stops handing out work, waits for the tasks in flight, tells every
@@ -31,7 +31,9 @@
 #include <map>
 #include <thread>
 
+#include "tetiso/placement.hpp"
 #include "tetiso/error.hpp"
+#include "tetiso/gpu.hpp"
 
 namespace tetiso {
 namespace {
@@ -200,7 +202,7 @@ void run_on(const cpu_set_t& cores, int threads) {
 }
 
 // Cores that workers with nothing left to do lend to the task this worker
-// runs (control() sends them at the end of the domain phase). Each lend
+// runs (the Controller sends them at the end of the domain phase). Each lend
 // brings one worker's share of threads; the reduction takes them between
 // rounds (ReduceOptions::more_threads), on the main thread, the only one that
 // calls MPI.
@@ -256,7 +258,7 @@ private:
 
 void work(const Job& job) {
     // The first "ready" names this worker's cores, which rank 0 lends to
-    // other ranks when this worker has nothing to do (control()).
+    // other ranks when this worker has nothing to do (Controller).
     send(cores_message(), 0, kReady);
     LentCores lent(job.config().threads);
     for (;;) {
@@ -268,11 +270,12 @@ void work(const Job& job) {
             if (in.get<std::int32_t>() != 0) throw JobStopped();
             return;
         }
-        std::int32_t task = 0;
+        std::int32_t task = 0, gpu = -1;
         std::optional<Piece> left, right;
         {
             Unpacker in(message);
             task = in.get<std::int32_t>();
+            gpu = in.get<std::int32_t>();
             if (in.get<std::int32_t>() == 2) {
                 left = in.get_piece();
                 right = in.get_piece();
@@ -286,7 +289,7 @@ void work(const Job& job) {
         const auto started = std::chrono::steady_clock::now();
         try {
             const Piece piece = job.execute(task, left ? &*left : nullptr, right ? &*right : nullptr, record,
-                                            TaskThreads{job.config().threads, [&lent] { return lent.take(); }});
+                                            TaskThreads{job.config().threads, [&lent] { return lent.take(); }, gpu});
             const int threads = lent.most();
             lent.give_back();
             left.reset();
@@ -381,25 +384,110 @@ private:
     struct sigaction previous_[std::size(kSignals)];
 };
 
-JobResult control(const Job& job, int ranks, const Progress& progress) {
-    TasksInFlight in_flight;
-    using clock = std::chrono::steady_clock;
-    const auto start = clock::now();
-    auto seconds = [&] { return std::chrono::duration<double>(clock::now() - start).count(); };
-    TaskQueue queue(job);
-    std::vector<std::optional<Piece>> pieces(static_cast<std::size_t>(job.task_count()));
-    std::deque<int> idle;
-    std::map<int, int> running; // worker -> task
-    std::vector<bool> greeted(static_cast<std::size_t>(ranks), false);
-    JobResult result;
-    result.ranks = ranks;
-    std::string failure;
-    int done = 0;
+// Which node each rank is on and each node's GPUs, on rank 0: ranks that
+// share memory (MPI_COMM_TYPE_SHARED) are a node, named by its lowest rank.
+// A node's GPUs are counted, and their memory taken, on every rank there;
+// the smallest answer stands, in case ranks see different devices.
+struct NodeLayout {
+    std::vector<int> node_of;     // by rank
+    std::vector<int> workers;     // by node: its worker ranks (rank 0 is none)
+    std::vector<int> gpus;        // by node
+    std::vector<double> gpu_mib;  // by node: the smallest GPU's memory
+};
 
-    auto fail = [&](int task, int rank, const std::string& what) {
-        if (failure.empty())
-            failure = "task '" + job.describe(task) + "' failed on rank " + std::to_string(rank) + ": " + what;
-    };
+NodeLayout node_layout(int rank, int ranks) {
+    MPI_Comm local;
+    MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &local);
+    int leader = rank;
+    MPI_Allreduce(&rank, &leader, 1, MPI_INT, MPI_MIN, local);
+    MPI_Comm_free(&local);
+    const int gpus = gpu_count();
+    const int mine[3] = {leader, gpus, gpus > 0 ? static_cast<int>(gpu_memory_mib(0)) : 0};
+    std::vector<int> all(3 * static_cast<std::size_t>(ranks));
+    MPI_Gather(mine, 3, MPI_INT, all.data(), 3, MPI_INT, 0, MPI_COMM_WORLD);
+    NodeLayout layout;
+    if (rank != 0) return layout;
+    std::map<int, int> node_of_leader;
+    for (int r = 0; r < ranks; ++r) {
+        const int* row = &all[3 * static_cast<std::size_t>(r)];
+        const auto [it, added] = node_of_leader.try_emplace(row[0], static_cast<int>(layout.gpus.size()));
+        if (added) {
+            layout.workers.push_back(0);
+            layout.gpus.push_back(row[1]);
+            layout.gpu_mib.push_back(row[2]);
+        }
+        const auto node = static_cast<std::size_t>(it->second);
+        layout.node_of.push_back(it->second);
+        if (r != 0) ++layout.workers[node];
+        layout.gpus[node] = std::min(layout.gpus[node], row[1]);
+        layout.gpu_mib[node] = std::min(layout.gpu_mib[node], static_cast<double>(row[2]));
+    }
+    return layout;
+}
+
+// Rank 0's side of the job: the task queue, the finished pieces, which
+// worker holds which task, and the cores idle workers lend.
+class Controller {
+public:
+    // nodes: with --device auto, which node each rank is on and its GPUs:
+    // one resource manager per node then places that node's workers' tasks.
+    Controller(const Job& job, int ranks, const Progress& progress, const std::optional<NodeLayout>& nodes)
+        : job_(job), ranks_(ranks), progress_(progress), start_(clock::now()), queue_(job),
+          pieces_(static_cast<std::size_t>(job.task_count())), greeted_(static_cast<std::size_t>(ranks), false),
+          own_cores_known_(current_cores(own_cores_)), job_cores_(own_cores_),
+          worker_cores_(static_cast<std::size_t>(ranks)), cores_known_(static_cast<std::size_t>(ranks), false),
+          lent_to_(static_cast<std::size_t>(ranks), -1) {
+        result_.ranks = ranks;
+        if (nodes) {
+            node_of_ = nodes->node_of;
+            for (std::size_t node = 0; node < nodes->gpus.size(); ++node)
+                placements_.emplace_back(job, nodes->workers[node], nodes->gpus[node], nodes->gpu_mib[node]);
+        }
+    }
+
+    JobResult run() {
+        while (!queue_.finished() || !running_.empty() || !waiting_.empty()) {
+            if (should_run_here()) {
+                execute_here();
+                continue;
+            }
+            while (failure_.empty() && !idle_.empty() && queue_.has_ready()) dispatch(take_idle());
+            if (failure_.empty()) start_granted();
+            else cancel_waiting();
+            if (failure_.empty() && !queue_.has_ready()) lend_idle_cores();
+            // A grant waits only for units that a running task holds: its
+            // result, the next message, frees them.
+            if (running_.empty() && (!failure_.empty() || queue_.finished())) break;
+            MPI_Status status;
+            const std::vector<std::byte> message = receive(MPI_ANY_SOURCE, status);
+            const int worker = status.MPI_SOURCE;
+            greeted_[static_cast<std::size_t>(worker)] = true;
+            if (status.MPI_TAG == kReady && message.size() == sizeof(cpu_set_t)) {
+                take_cores(worker, message);
+            } else if (status.MPI_TAG == kResult) {
+                take_result(worker, message);
+            } else if (status.MPI_TAG == kFailure) {
+                take_failure(worker, message);
+            }
+            idle_.push_back(worker);
+        }
+        stop_workers();
+        if (!failure_.empty()) throw Error(failure_);
+        result_.surface = std::move(*pieces_[0]);
+        result_.seconds = seconds();
+        return std::move(result_);
+    }
+
+private:
+    using clock = std::chrono::steady_clock;
+
+    double seconds() const { return std::chrono::duration<double>(clock::now() - start_).count(); }
+    std::optional<Piece>& piece(int task) { return pieces_[static_cast<std::size_t>(task)]; }
+
+    void fail(int task, int rank, const std::string& what) {
+        if (failure_.empty())
+            failure_ = "task '" + job_.describe(task) + "' failed on rank " + std::to_string(rank) + ": " + what;
+    }
 
     // A seam rank 0 runs itself when no task is in flight and it is the only
     // one ready. Then every unfinished task is one of its ancestors (any
@@ -413,51 +501,47 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
     // whole surface several times, no longer lands on a worker. A looser rule,
     // with seams of other subtrees still in flight, could keep a finished
     // worker's result and the parent it readies waiting for rank 0.
-    auto run_here = [&] {
-        return failure.empty() && running.empty() && queue.ready_count() == 1 &&
-               job.kind(queue.peek()) == TaskKind::seam;
-    };
+    bool should_run_here() const {
+        return failure_.empty() && running_.empty() && waiting_.empty() && queue_.ready_count() == 1 &&
+               job_.kind(queue_.peek()) == TaskKind::seam;
+    }
+
     // Such a seam runs on the cores of rank 0 and of every worker, which are
     // all idle then and wait without spinning (wait_for_message): one thread
     // per rank's share, on the union of the ranks' bindings. Threads do not
     // change the result. The job's last seams, mostly their reduction near
     // the seam, were 1.7 s of a 25.9 s job at 15 workers, with 15 cores idle.
-    cpu_set_t own_cores;
-    const bool own_cores_known = current_cores(own_cores);
-    cpu_set_t job_cores = own_cores;
-    auto execute_here = [&] {
-        const int task = queue.pop();
-        const TaskNode& n = job.node(task);
+    void execute_here() {
+        const int task = queue_.pop();
+        const TaskNode& n = job_.node(task);
         TaskRecord record;
         record.start = seconds();
-        int threads = job.config().threads;
-        if (own_cores_known) {
-            threads = std::min(std::max(1, threads) * ranks, kMaxThreads);
-            run_on(job_cores, threads);
+        int threads = job_.config().threads;
+        if (own_cores_known_) {
+            threads = std::min(std::max(1, threads) * ranks_, kMaxThreads);
+            run_on(job_cores_, threads);
         }
         auto back_home = [&] {
-            if (own_cores_known) run_on(own_cores, std::max(1, job.config().threads));
+            if (own_cores_known_) run_on(own_cores_, std::max(1, job_.config().threads));
         };
-        in_flight.update(job, {{0, task}}, ranks);
+        in_flight_.update(job_, {{0, task}}, ranks_);
         try {
-            pieces[static_cast<std::size_t>(task)] =
-                job.execute(task, &*pieces[static_cast<std::size_t>(n.left)],
-                            &*pieces[static_cast<std::size_t>(n.right)], record, TaskThreads{threads, {}});
+            piece(task) = job_.execute(task, &*piece(n.left), &*piece(n.right), record, TaskThreads{threads, {}, {}});
         } catch (const std::exception& e) {
             back_home();
             fail(task, 0, dynamic_cast<const std::bad_alloc*>(&e) ? "out of memory" : e.what());
             return;
         }
         back_home();
-        in_flight.update(job, running, ranks);
-        pieces[static_cast<std::size_t>(n.left)].reset();
-        pieces[static_cast<std::size_t>(n.right)].reset();
+        in_flight_.update(job_, running_, ranks_);
+        piece(n.left).reset();
+        piece(n.right).reset();
         record.rank = 0;
         record.end = seconds();
-        result.tasks.push_back(record);
-        queue.complete(task);
-        if (progress) progress(++done, job.task_count(), seconds());
-    };
+        result_.tasks.push_back(record);
+        queue_.complete(task);
+        if (progress_) progress_(++done_, job_.task_count(), seconds());
+    }
 
     // Lending. Once no task is ready, a worker without work lends its cores
     // to a running task (the one with the fewest lends, the latest started
@@ -467,134 +551,212 @@ JobResult control(const Job& job, int ranks, const Progress& progress) {
     // order: 1.2-1.7 s of idle workers at 250 domains and 15 workers, 3.2 s
     // at 125. A lent core comes back when its borrower's task ends; a lender
     // given a seam meanwhile shares it for that seam's time.
-    std::vector<cpu_set_t> worker_cores(static_cast<std::size_t>(ranks));
-    std::vector<bool> cores_known(static_cast<std::size_t>(ranks), false);
-    std::vector<int> lent_to(static_cast<std::size_t>(ranks), -1); // lender -> borrower
-    std::map<int, int> lends;                                     // borrower -> lends it has
-    std::map<int, double> dispatched_at;                          // worker -> when its task was sent
-    auto lend_idle_cores = [&] {
-        for (const int lender : idle) {
-            if (lent_to[static_cast<std::size_t>(lender)] >= 0 || !cores_known[static_cast<std::size_t>(lender)]) continue;
+    void lend_idle_cores() {
+        for (const int lender : idle_) {
+            if (lent_to_[static_cast<std::size_t>(lender)] >= 0 || !cores_known_[static_cast<std::size_t>(lender)]) continue;
             int borrower = -1;
-            for (const auto& [worker, task] : running) {
-                if (!cores_known[static_cast<std::size_t>(worker)]) continue;
-                if (borrower < 0 || lends[worker] < lends[borrower] ||
-                    (lends[worker] == lends[borrower] && dispatched_at[worker] > dispatched_at[borrower]))
+            for (const auto& [worker, task] : running_) {
+                if (!cores_known_[static_cast<std::size_t>(worker)]) continue;
+                if (borrower < 0 || lends_[worker] < lends_[borrower] ||
+                    (lends_[worker] == lends_[borrower] && dispatched_at_[worker] > dispatched_at_[borrower]))
                     borrower = worker;
             }
             if (borrower < 0) return;
             std::vector<std::byte> cores(sizeof(cpu_set_t));
-            std::memcpy(cores.data(), &worker_cores[static_cast<std::size_t>(lender)], sizeof(cpu_set_t));
+            std::memcpy(cores.data(), &worker_cores_[static_cast<std::size_t>(lender)], sizeof(cpu_set_t));
             send(cores, borrower, kLend);
-            lent_to[static_cast<std::size_t>(lender)] = borrower;
-            ++lends[borrower];
+            lent_to_[static_cast<std::size_t>(lender)] = borrower;
+            ++lends_[borrower];
         }
-    };
-    auto end_lends_to = [&](int borrower) {
-        for (int& to : lent_to)
-            if (to == borrower) to = -1;
-        lends.erase(borrower);
-    };
-    // An idle worker whose cores are not lent out, where there is one.
-    auto take_idle = [&] {
-        auto it = std::find_if(idle.begin(), idle.end(),
-                               [&](int worker) { return lent_to[static_cast<std::size_t>(worker)] < 0; });
-        if (it == idle.end()) it = idle.begin();
-        const int worker = *it;
-        idle.erase(it);
-        return worker;
-    };
+    }
 
-    auto dispatch = [&](int worker) {
-        const int task = queue.pop();
-        const TaskNode& n = job.node(task);
+    void end_lends_to(int borrower) {
+        for (int& to : lent_to_)
+            if (to == borrower) to = -1;
+        lends_.erase(borrower);
+    }
+
+    // An idle worker whose cores are not lent out, where there is one.
+    int take_idle() {
+        auto it = std::find_if(idle_.begin(), idle_.end(),
+                               [&](int worker) { return lent_to_[static_cast<std::size_t>(worker)] < 0; });
+        if (it == idle_.end()) it = idle_.begin();
+        const int worker = *it;
+        idle_.erase(it);
+        return worker;
+    }
+
+    // Hands the next task to `worker`: at once, or, with --device auto,
+    // once its node's manager has granted it a device.
+    void dispatch(int worker) {
+        const int task = queue_.pop();
+        if (placements_.empty()) {
+            const JobConfig& c = job_.config();
+            send_task(worker, task, c.device == JobConfig::Device::gpu ? c.gpu : -1);
+            return;
+        }
+        const TaskNode& n = job_.node(task);
+        const int node = node_of_[static_cast<std::size_t>(worker)];
+        NodePlacement& placement = placements_[static_cast<std::size_t>(node)];
+        const Piece* left = n.left >= 0 ? &*piece(n.left) : nullptr;
+        const Piece* right = n.right >= 0 ? &*piece(n.right) : nullptr;
+        const Grant grant = placement.manager.request(placement.request(task, left, right), seconds());
+        placed_[worker] = Placed{task, node, grant, seconds(), 0};
+        waiting_.push_back(worker);
+    }
+
+    // Sends the tasks whose grants their devices admit now, in the order
+    // they were asked for (the manager keeps each device's order).
+    void start_granted() {
+        for (auto it = waiting_.begin(); it != waiting_.end();) {
+            Placed& p = placed_.at(*it);
+            NodePlacement& placement = placements_[static_cast<std::size_t>(p.node)];
+            if (!placement.manager.start(p.grant.ticket, seconds())) {
+                ++it;
+                continue;
+            }
+            p.sent_at = seconds();
+            send_task(*it, p.task, placement.gpu_of(p.grant.device));
+            it = waiting_.erase(it);
+        }
+    }
+
+    // After a failure no task is sent: those waiting for a grant give it up.
+    void cancel_waiting() {
+        for (const int worker : waiting_) {
+            const Placed& p = placed_.at(worker);
+            placements_[static_cast<std::size_t>(p.node)].manager.cancel(p.grant.ticket);
+            placed_.erase(worker);
+            idle_.push_back(worker);
+        }
+        waiting_.clear();
+    }
+
+    // gpu: where a domain task runs, GPU `gpu` of the worker's node or (-1) the CPU.
+    void send_task(int worker, int task, int gpu) {
+        const TaskNode& n = job_.node(task);
         Packer out;
         out.put<std::int32_t>(task);
+        out.put<std::int32_t>(gpu);
         out.put<std::int32_t>(n.left >= 0 ? 2 : 0);
         if (n.left >= 0) {
-            out.reserve(Packer::piece_size(*pieces[static_cast<std::size_t>(n.left)]) +
-                        Packer::piece_size(*pieces[static_cast<std::size_t>(n.right)]));
-            out.put_piece(*pieces[static_cast<std::size_t>(n.left)]);
-            out.put_piece(*pieces[static_cast<std::size_t>(n.right)]);
-            pieces[static_cast<std::size_t>(n.left)].reset();
-            pieces[static_cast<std::size_t>(n.right)].reset();
+            out.reserve(Packer::piece_size(*piece(n.left)) + Packer::piece_size(*piece(n.right)));
+            out.put_piece(*piece(n.left));
+            out.put_piece(*piece(n.right));
+            piece(n.left).reset();
+            piece(n.right).reset();
         }
         send(out.bytes, worker, kTask);
-        running[worker] = task;
-        in_flight.update(job, running, ranks);
-        dispatched_at[worker] = seconds();
-    };
+        running_[worker] = task;
+        in_flight_.update(job_, running_, ranks_);
+        dispatched_at_[worker] = seconds();
+    }
 
-    while (!queue.finished() || !running.empty()) {
-        if (run_here()) {
-            execute_here();
-            continue;
+    // A worker's first "ready": the cores it is bound to.
+    void take_cores(int worker, const std::vector<std::byte>& message) {
+        cpu_set_t& cores = worker_cores_[static_cast<std::size_t>(worker)];
+        std::memcpy(&cores, message.data(), sizeof cores);
+        cores_known_[static_cast<std::size_t>(worker)] = true;
+        CPU_OR(&job_cores_, &job_cores_, &cores);
+    }
+
+    void take_result(int worker, const std::vector<std::byte>& message) {
+        Unpacker in(message);
+        TaskRecord record;
+        record.task = in.get<std::int32_t>();
+        const double duration = in.get<double>();
+        const auto threads = in.get<std::int32_t>();
+        record.triangles_in = in.get<std::uint64_t>();
+        record.triangles_out = in.get<std::uint64_t>();
+        record.samples_out = in.get<std::uint64_t>();
+        record.stages = in.get<TaskRecord::Stages>();
+        record.field_low = in.get<float>();
+        record.field_high = in.get<float>();
+        const TaskNode& n = job_.node(record.task);
+        record.kind = job_.kind(record.task);
+        record.first_domain = n.first;
+        record.domain_count = n.count;
+        record.rank = worker;
+        record.threads = threads;
+        record.end = seconds();
+        record.start = std::max(0.0, record.end - duration);
+        if (const auto it = placed_.find(worker); it != placed_.end()) {
+            const Placed& p = it->second;
+            const double transfer = record.stages.upload + record.stages.download;
+            placements_[static_cast<std::size_t>(p.node)].manager.finish(p.grant.ticket, std::max(0.0, duration - transfer),
+                                                                         transfer);
+            record.predicted_seconds = p.grant.predicted_seconds;
+            record.wait_seconds = p.sent_at - p.asked_at;
+            placed_.erase(it);
         }
-        while (failure.empty() && !idle.empty() && queue.has_ready()) dispatch(take_idle());
-        if (failure.empty() && !queue.has_ready()) lend_idle_cores();
-        if (running.empty() && (!failure.empty() || queue.finished())) break;
-        MPI_Status status;
-        const std::vector<std::byte> message = receive(MPI_ANY_SOURCE, status);
-        const int worker = status.MPI_SOURCE;
-        greeted[static_cast<std::size_t>(worker)] = true;
-        if (status.MPI_TAG == kReady && message.size() == sizeof(cpu_set_t)) {
-            cpu_set_t& cores = worker_cores[static_cast<std::size_t>(worker)];
-            std::memcpy(&cores, message.data(), sizeof cores);
-            cores_known[static_cast<std::size_t>(worker)] = true;
-            CPU_OR(&job_cores, &job_cores, &cores);
-        } else if (status.MPI_TAG == kResult) {
-            Unpacker in(message);
-            TaskRecord record;
-            record.task = in.get<std::int32_t>();
-            const double duration = in.get<double>();
-            const auto threads = in.get<std::int32_t>();
-            record.triangles_in = in.get<std::uint64_t>();
-            record.triangles_out = in.get<std::uint64_t>();
-            record.samples_out = in.get<std::uint64_t>();
-            record.stages = in.get<TaskRecord::Stages>();
-            record.field_low = in.get<float>();
-            record.field_high = in.get<float>();
-            const TaskNode& n = job.node(record.task);
-            record.kind = job.kind(record.task);
-            record.first_domain = n.first;
-            record.domain_count = n.count;
-            record.rank = worker;
-            record.threads = threads;
-            record.end = seconds();
-            record.start = std::max(0.0, record.end - duration);
-            pieces[static_cast<std::size_t>(record.task)] = in.get_piece();
-            result.tasks.push_back(record);
-            running.erase(worker);
-            in_flight.update(job, running, ranks);
-            end_lends_to(worker);
-            queue.complete(record.task);
-            if (progress) progress(++done, job.task_count(), seconds());
-        } else if (status.MPI_TAG == kFailure) {
-            Unpacker in(message);
-            const int task = in.get<std::int32_t>();
-            fail(task, worker, in.get_string());
-            running.erase(worker);
-            in_flight.update(job, running, ranks);
-            end_lends_to(worker);
+        piece(record.task) = in.get_piece();
+        result_.tasks.push_back(record);
+        running_.erase(worker);
+        in_flight_.update(job_, running_, ranks_);
+        end_lends_to(worker);
+        queue_.complete(record.task);
+        if (progress_) progress_(++done_, job_.task_count(), seconds());
+    }
+
+    void take_failure(int worker, const std::vector<std::byte>& message) {
+        Unpacker in(message);
+        const int task = in.get<std::int32_t>();
+        fail(task, worker, in.get_string());
+        if (const auto it = placed_.find(worker); it != placed_.end()) {
+            placements_[static_cast<std::size_t>(it->second.node)].manager.cancel(it->second.grant.ticket);
+            placed_.erase(it);
         }
-        idle.push_back(worker);
+        running_.erase(worker);
+        in_flight_.update(job_, running_, ranks_);
+        end_lends_to(worker);
     }
 
     // Every worker's first "ready" is received before it is told to stop, so
     // no message is left unmatched at MPI_Finalize.
-    for (int worker = 1; worker < ranks; ++worker)
-        if (!greeted[static_cast<std::size_t>(worker)]) {
-            MPI_Status status;
-            receive(worker, status);
-        }
-    Packer stop;
-    stop.put<std::int32_t>(failure.empty() ? 0 : 1);
-    for (int worker = 1; worker < ranks; ++worker) send(stop.bytes, worker, kStop);
-    if (!failure.empty()) throw Error(failure);
-    result.surface = std::move(*pieces[0]);
-    result.seconds = seconds();
-    return result;
-}
+    void stop_workers() {
+        for (int worker = 1; worker < ranks_; ++worker)
+            if (!greeted_[static_cast<std::size_t>(worker)]) {
+                MPI_Status status;
+                receive(worker, status);
+            }
+        Packer stop;
+        stop.put<std::int32_t>(failure_.empty() ? 0 : 1);
+        for (int worker = 1; worker < ranks_; ++worker) send(stop.bytes, worker, kStop);
+    }
+
+    const Job& job_;
+    const int ranks_;
+    const Progress& progress_;
+    TasksInFlight in_flight_;
+    const clock::time_point start_;
+    TaskQueue queue_;
+    std::vector<std::optional<Piece>> pieces_; // by task, while its parent has not taken it
+    std::deque<int> idle_;
+    std::map<int, int> running_; // worker -> task
+    std::vector<bool> greeted_;
+    JobResult result_;
+    std::string failure_;
+    int done_ = 0;
+    cpu_set_t own_cores_;
+    bool own_cores_known_;
+    cpu_set_t job_cores_; // the union of every rank's cores
+    std::vector<cpu_set_t> worker_cores_;
+    std::vector<bool> cores_known_;
+    std::vector<int> lent_to_;           // lender -> borrower
+    std::map<int, int> lends_;           // borrower -> lends it has
+    std::map<int, double> dispatched_at_; // worker -> when its task was sent
+    // --device auto: a manager per node, and each worker's grant from the
+    // request to its task's result.
+    struct Placed {
+        int task = 0, node = 0;
+        Grant grant;
+        double asked_at = 0, sent_at = 0;
+    };
+    std::vector<int> node_of_;                 // by rank
+    std::deque<NodePlacement> placements_;     // by node
+    std::map<int, Placed> placed_;             // worker -> its task's grant
+    std::deque<int> waiting_;                  // workers whose task waits for its grant, in order
+};
 
 } // namespace
 
@@ -700,11 +862,13 @@ std::optional<JobResult> run_mpi(const Job& job, const Progress& progress) {
         throw Error("the ranks built different partitions of the mesh (its files, or METIS's parts, differ "
                     "between them); no task was run");
     }
+    std::optional<NodeLayout> nodes;
+    if (job.config().device == JobConfig::Device::automatic) nodes = node_layout(rank, ranks);
     if (rank != 0) {
         work(job);
         return std::nullopt;
     }
-    return control(job, ranks, progress);
+    return Controller(job, ranks, progress, nodes).run();
 }
 
 } // namespace tetiso

@@ -164,5 +164,43 @@ else
     fail "split of the mesh, or the job over it"
 fi
 
+# 8. --device auto: the same bytes as --device cpu, with one rank and with
+#    three. Where there is no GPU every task runs on the CPU; the report says
+#    where each ran, what the node's resource manager predicted and how long
+#    the task waited, and sums each device's share.
+auto_args=(run --lattice 40 --domains 27 --field gyroid --quiet)
+"$tetiso" "${auto_args[@]}" --device cpu -o "$work/cpu.ply" || fail "--device cpu run"
+have_gpu=0
+"$tetiso" extract --lattice 8 --device gpu -o "$work/probe.ply" 2>/dev/null && have_gpu=1
+for k in 1 3; do
+    if [ "$k" -eq 1 ]; then
+        "$tetiso" "${auto_args[@]}" --device auto -o "$work/auto1.ply" --report "$work/auto1.json"
+    else
+        mpi "$k" "$tetiso" "${auto_args[@]}" --device auto -o "$work/auto$k.ply" --report "$work/auto$k.json"
+    fi || { fail "--device auto with $k ranks"; continue; }
+    cmp -s "$work/cpu.ply" "$work/auto$k.ply" && ok || fail "--device auto with $k ranks differs from --device cpu"
+    python3 - "$work/auto$k.json" "$have_gpu" <<'PY' && ok || fail "report of --device auto with $k ranks"
+import json, sys
+r = json.load(open(sys.argv[1]))
+have_gpu = sys.argv[2] == "1"
+tasks = r["tasks"]
+assert r["device"] == "auto", r["device"]
+for t in tasks:
+    assert t["device"] == "cpu" or (have_gpu and t["device"].startswith("gpu ") and t["kind"] == "domain"), t
+    assert t["wait_seconds"] >= 0, t
+    # Every task a worker ran was placed by its node's manager, with a prediction.
+    assert t["predicted_seconds"] > 0 or (t["rank"] == 0 and r["ranks"] > 1), t
+summary = r["devices"]
+assert sum(d["tasks"] for d in summary.values()) == len(tasks), summary
+assert sum(d["domain_tasks"] for d in summary.values()) == r["domains"], summary
+if not have_gpu:
+    assert list(summary) == ["cpu"], summary
+PY
+done
+if python3 -c "import matplotlib" 2>/dev/null; then
+    python3 "$here/../../scripts/plot_timeline.py" "$work/auto3.json" -o "$work/auto.png" && [ -s "$work/auto.png" ] && ok ||
+        fail "timeline plot of --device auto"
+fi
+
 echo "$passed passed, $failures failed"
 [ "$failures" -eq 0 ]

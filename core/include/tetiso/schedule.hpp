@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
@@ -59,10 +60,11 @@ struct JobConfig {
     // more reduces the seams further and costs memory and messages; -1 keeps none.
     int sample_rings = SeamOptions{}.sample_rings;
     int threads = 1;                 // threads inside one task
-    // Where the domain tasks run: the CPU, or this process's GPU `gpu`
-    // (extraction and reduction there; the seams stay on the CPU). The
-    // surface is the same bytes either way.
-    enum class Device { cpu, gpu };
+    // Where the domain tasks run: the CPU, this process's GPU `gpu`
+    // (extraction and reduction there; the seams stay on the CPU), or, with
+    // automatic, wherever each node's resource manager predicts a task ends
+    // first (resources.hpp). The surface is the same bytes either way.
+    enum class Device { cpu, gpu, automatic };
     Device device = Device::cpu;
     int gpu = 0;
 };
@@ -103,6 +105,10 @@ std::vector<TaskNode> task_tree(const std::vector<DomainTreeNode>& partition_tre
 struct TaskThreads {
     int count = 1;
     std::function<int()> more;
+    // Where a domain task runs when its place was decided for it
+    // (--device auto): GPU `gpu` of the node, or the CPU (-1). Unset: the
+    // job's --device.
+    std::optional<int> gpu;
 };
 
 struct TaskRecord {
@@ -132,6 +138,10 @@ struct TaskRecord {
     // A domain task's lowest and highest field value (none, low > high,
     // where the values stayed on a GPU): a surface that comes out empty
     // says whether its level lies outside them.
+    // With --device auto: the seconds the node's resource manager predicted
+    // for the task on the device it granted, and how long the task waited
+    // for that grant (0 otherwise).
+    double predicted_seconds = 0, wait_seconds = 0;
     float field_low = std::numeric_limits<float>::infinity();
     float field_high = -std::numeric_limits<float>::infinity();
 };
@@ -183,14 +193,14 @@ private:
         return options;
     }
 
-    // A domain task on this process's GPU.
-    Piece execute_on_gpu(int domain, TaskRecord& record, const ReduceOptions& options) const;
+    // A domain task on GPU `gpu` of this process's node.
+    Piece execute_on_gpu(int domain, int gpu, TaskRecord& record, const ReduceOptions& options) const;
 
     JobConfig config_;
     std::unique_ptr<Partition> partition_;
-    // Made at the first domain task that runs on the GPU (rank 0 of an MPI
+    // Made at the first domain task that runs on each GPU (rank 0 of an MPI
     // job runs only seams, and needs none); kept for the next.
-    mutable std::unique_ptr<Gpu> gpu_;
+    mutable std::map<int, std::unique_ptr<Gpu>> gpus_;
     std::vector<TaskNode> tree_;
     float level_ = 0;
     ReduceOptions reduce_options_;

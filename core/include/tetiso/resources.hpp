@@ -1,0 +1,147 @@
+// The resource manager of one node (paper, section "Load balancing and job
+// scheduling"): one counter per device, the node's CPU processes and each of
+// its GPUs, and a choice of device per task that minimises the time at which
+// the task would end there.
+//
+// A request names the units it needs on each device it may run on (the CPU:
+// one process; a GPU: the MiB of device memory the task is estimated to
+// need, so that processes sharing a GPU never together ask it for more than
+// it has). The manager predicts the task's seconds τ_i on each device from
+// the tasks that finished there (PerformanceModel), finds the time t_b,i at
+// which counter i admits the request, and grants the device with the
+// smallest t_b,i + τ_i. Grants are decided in the order requests arrive, and
+// none is placed on a device before one granted earlier there: a waiting
+// client is served in order and a large request is not starved by small
+// ones. The manager never lets a device's units in use exceed its capacity:
+// a grant only starts (start()) when its units are free now, whatever was
+// predicted.
+//
+// Pure and clock-injected: the caller says what time it is, so that tests
+// drive it with a simulated clock and the MPI controller with its own.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tetiso {
+
+// Seconds a kind of task takes on one device as a function of its size,
+// learnt from the tasks that finished there. Like StarPU's history-based
+// model, a size seen kMinSamples times is predicted by the mean of its
+// samples; like its non-linear regression model, any other size, once
+// kMinSamples samples of at least two sizes exist, by a fit of
+// seconds = a * size^b (least squares in log-log space). Before that there
+// is no prediction: the caller falls back to another device's or a default.
+class PerformanceModel {
+public:
+    static constexpr int kMinSamples = 3;
+
+    void add(double size, double seconds);
+    std::optional<double> predict(double size) const;
+    int samples() const { return samples_; }
+
+private:
+    struct History {
+        int count = 0;
+        double sum = 0;
+    };
+    std::map<double, History> by_size_;
+    int samples_ = 0;
+    // Sums for the regression of log(seconds) on log(size).
+    double sx_ = 0, sy_ = 0, sxx_ = 0, sxy_ = 0;
+};
+
+struct ManagedDevice {
+    std::string name;    // "cpu", "gpu 0", ...
+    int gpu = -1;        // the CUDA index, -1 for the CPU
+    double capacity = 1; // units: processes for the CPU, MiB for a GPU
+    // Seconds to move one unit of a task's size to the device and its result
+    // back, added to the model's τ (StarPU's dmda counts transfers the same
+    // way): the value to assume until a task has finished there, after which
+    // the mean of the measured ones is used; 0 for the CPU.
+    double transfer_per_size = 0;
+};
+
+struct ResourceRequest {
+    int kind = 0;       // which performance model: a task kind
+    double size = 1;    // the task's size, the models' variable
+    // Units needed on each device, in the manager's device order; a value
+    // <= 0 means the task cannot run there.
+    std::vector<double> units;
+};
+
+struct Grant {
+    int ticket = -1;
+    int device = -1;             // index into the manager's devices
+    double start = 0;            // t_b: when the device admits the request
+    double predicted_seconds = 0; // τ on that device
+};
+
+class ResourceManager {
+public:
+    // Seconds assumed for a kind of task on a device whose model has too few
+    // samples and with no other device's to go by: low, so that every device
+    // is tried early and gets a model (StarPU calibrates the same way).
+    static constexpr double kUncalibratedSeconds = 1e-3;
+    // A device not calibrated for a kind of task that another device is is
+    // assumed this many times faster than the fastest of those: enough to be
+    // tried (an equal guess would lose every tie to the device listed first,
+    // and never learn), not so much that it is flooded meanwhile.
+    static constexpr double kUncalibratedSpeedup = 2;
+
+    explicit ResourceManager(std::vector<ManagedDevice> devices);
+
+    const std::vector<ManagedDevice>& devices() const { return devices_; }
+
+    // Decides where and when the request runs, at time `now`; books its
+    // units on that device from grant.start for the predicted seconds.
+    // Throws tetiso::Error when no device can hold it.
+    Grant request(const ResourceRequest& request, double now);
+
+    // Whether the grant may start now: its device has the units free now
+    // and every grant booked before it there has started. True marks it
+    // started (its units in use) — call until it is.
+    bool start(int ticket, double now);
+
+    // The task of a started grant ended after `seconds` of work on the
+    // device and `transfer_seconds` moving its data there and back: its
+    // units are free, the model of its kind on its device learns the work,
+    // and the device's transfer rate the transfer.
+    void finish(int ticket, double seconds, double transfer_seconds = 0);
+
+    // Drops a grant, started or not, without learning from it (its task
+    // failed, or the job stopped before it ran).
+    void cancel(int ticket);
+
+    // Units in use on a device now (started grants).
+    double in_use(int device) const;
+
+    // The prediction for a kind and size on a device, as request() makes it.
+    double predict(int kind, double size, int device) const;
+
+    const PerformanceModel* model(int kind, int device) const;
+
+private:
+    struct Booking {
+        int device = -1;
+        double units = 0;
+        double start = 0, end = 0; // predicted, while not started; end stays predicted
+        bool started = false;
+        ResourceRequest request;
+    };
+    // When device `d` could admit `units` for `seconds`, at `now` or later.
+    double admission_time(int device, double units, double seconds, double now) const;
+    double units_booked_at(int device, double time, double now) const;
+
+    std::vector<ManagedDevice> devices_;
+    std::map<std::pair<int, int>, PerformanceModel> models_; // (kind, device)
+    std::map<int, Booking> bookings_;                        // ticket -> booking, open ones
+    std::vector<double> last_start_;                         // per device, for FIFO order
+    std::vector<double> transfer_seconds_, transfer_size_;    // per device, measured so far
+    int next_ticket_ = 0;
+};
+
+} // namespace tetiso

@@ -1,0 +1,180 @@
+// The node's resource manager (resources.hpp).
+#include "tetiso/resources.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "tetiso/error.hpp"
+
+namespace tetiso {
+
+void PerformanceModel::add(double size, double seconds) {
+    size = std::max(size, 1.0);
+    seconds = std::max(seconds, 1e-9);
+    History& h = by_size_[size];
+    ++h.count;
+    h.sum += seconds;
+    ++samples_;
+    const double x = std::log(size), y = std::log(seconds);
+    sx_ += x;
+    sy_ += y;
+    sxx_ += x * x;
+    sxy_ += x * y;
+}
+
+std::optional<double> PerformanceModel::predict(double size) const {
+    size = std::max(size, 1.0);
+    if (const auto it = by_size_.find(size); it != by_size_.end() && it->second.count >= kMinSamples)
+        return it->second.sum / it->second.count;
+    if (samples_ < kMinSamples) return std::nullopt;
+    const double n = samples_;
+    const double spread = n * sxx_ - sx_ * sx_;
+    // One size only (or sizes too close to tell apart): its mean is all
+    // there is to go by.
+    if (by_size_.size() < 2 || spread <= 1e-12 * n * n) {
+        double sum = 0;
+        for (const auto& [s, h] : by_size_) sum += h.sum;
+        return sum / n;
+    }
+    const double b = (n * sxy_ - sx_ * sy_) / spread;
+    const double log_a = (sy_ - b * sx_) / n;
+    return std::exp(log_a + b * std::log(size));
+}
+
+ResourceManager::ResourceManager(std::vector<ManagedDevice> devices)
+    : devices_(std::move(devices)),
+      last_start_(devices_.size(), -std::numeric_limits<double>::infinity()),
+      transfer_seconds_(devices_.size(), 0.0),
+      transfer_size_(devices_.size(), 0.0) {
+    if (devices_.empty()) throw Error("a resource manager needs at least one device");
+    for (const ManagedDevice& d : devices_)
+        if (!(d.capacity > 0)) throw Error("device " + d.name + " has no capacity");
+}
+
+const PerformanceModel* ResourceManager::model(int kind, int device) const {
+    const auto it = models_.find({kind, device});
+    return it == models_.end() ? nullptr : &it->second;
+}
+
+double ResourceManager::predict(int kind, double size, int device) const {
+    const auto d = static_cast<std::size_t>(device);
+    const double transfer =
+        (transfer_size_[d] > 0 ? transfer_seconds_[d] / transfer_size_[d] : devices_[d].transfer_per_size) * size;
+    if (const PerformanceModel* m = model(kind, device))
+        if (const auto seconds = m->predict(size)) return *seconds + transfer;
+    // Uncalibrated here: somewhat faster than the fastest device that knows
+    // the task, so that this one is tried and learns, but is not flooded
+    // meanwhile with tasks each thought to take nothing.
+    std::optional<double> fastest;
+    for (const auto& [key, m] : models_)
+        if (key.first == kind)
+            if (const auto seconds = m.predict(size)) fastest = std::min(fastest.value_or(*seconds), *seconds);
+    return (fastest ? *fastest / kUncalibratedSpeedup : kUncalibratedSeconds) + transfer;
+}
+
+double ResourceManager::units_booked_at(int device, double time, double now) const {
+    double units = 0;
+    for (const auto& [ticket, b] : bookings_) {
+        if (b.device != device) continue;
+        // A started task that overran its prediction still holds its units;
+        // one not started yet cannot have started before now.
+        const double start = b.started ? b.start : std::max(b.start, now);
+        const double end = b.started ? std::max(b.end, now + 1e-9) : start + (b.end - b.start);
+        if (start <= time && time < end) units += b.units;
+    }
+    return units;
+}
+
+double ResourceManager::admission_time(int device, double units, double seconds, double now) const {
+    const double capacity = devices_[static_cast<std::size_t>(device)].capacity;
+    const double earliest = std::max(now, last_start_[static_cast<std::size_t>(device)]);
+    // The units in use change only where a booking starts or ends: the
+    // request fits from t if it fits at t and at every start within its span.
+    std::vector<double> candidates{earliest}, starts;
+    for (const auto& [ticket, b] : bookings_) {
+        if (b.device != device) continue;
+        const double start = b.started ? b.start : std::max(b.start, now);
+        const double end = b.started ? std::max(b.end, now + 1e-9) : start + (b.end - b.start);
+        if (end > earliest) candidates.push_back(end);
+        starts.push_back(start);
+    }
+    std::sort(candidates.begin(), candidates.end());
+    for (const double t : candidates) {
+        bool fits = units_booked_at(device, t, now) + units <= capacity;
+        for (const double s : starts)
+            if (fits && s > t && s < t + seconds) fits = units_booked_at(device, s, now) + units <= capacity;
+        if (fits) return t;
+    }
+    return candidates.back(); // after every booking the device is empty, and units <= capacity
+}
+
+Grant ResourceManager::request(const ResourceRequest& request, double now) {
+    Grant best;
+    double best_end = std::numeric_limits<double>::infinity();
+    for (std::size_t d = 0; d < devices_.size(); ++d) {
+        const double units = d < request.units.size() ? request.units[d] : 0;
+        if (!(units > 0) || units > devices_[d].capacity) continue;
+        const int device = static_cast<int>(d);
+        const double seconds = predict(request.kind, request.size, device);
+        const double start = admission_time(device, units, seconds, now);
+        // Ties go to the lower device index: the CPU first, where it is listed first.
+        if (start + seconds < best_end) {
+            best_end = start + seconds;
+            best.device = device;
+            best.start = start;
+            best.predicted_seconds = seconds;
+        }
+    }
+    if (best.device < 0) throw Error("no device of the node can hold a task of size " + std::to_string(request.size));
+    best.ticket = next_ticket_++;
+    Booking booking;
+    booking.device = best.device;
+    booking.units = request.units[static_cast<std::size_t>(best.device)];
+    booking.start = best.start;
+    booking.end = best.start + best.predicted_seconds;
+    booking.request = request;
+    bookings_[best.ticket] = booking;
+    last_start_[static_cast<std::size_t>(best.device)] = best.start;
+    return best;
+}
+
+double ResourceManager::in_use(int device) const {
+    double units = 0;
+    for (const auto& [ticket, b] : bookings_)
+        if (b.device == device && b.started) units += b.units;
+    return units;
+}
+
+bool ResourceManager::start(int ticket, double now) {
+    const auto it = bookings_.find(ticket);
+    if (it == bookings_.end()) throw Error("resource grant " + std::to_string(ticket) + " is not open");
+    Booking& b = it->second;
+    if (b.started) return true;
+    for (const auto& [other, o] : bookings_) {
+        if (other >= ticket) break;
+        if (o.device == b.device && !o.started) return false; // served in order
+    }
+    if (in_use(b.device) + b.units > devices_[static_cast<std::size_t>(b.device)].capacity) return false;
+    const double duration = b.end - b.start;
+    b.started = true;
+    b.start = now;
+    b.end = now + duration;
+    return true;
+}
+
+void ResourceManager::cancel(int ticket) { bookings_.erase(ticket); }
+
+void ResourceManager::finish(int ticket, double seconds, double transfer_seconds) {
+    const auto it = bookings_.find(ticket);
+    if (it == bookings_.end() || !it->second.started) throw Error("resource grant " + std::to_string(ticket) + " did not start");
+    const Booking& b = it->second;
+    models_[{b.request.kind, b.device}].add(b.request.size, seconds);
+    if (transfer_seconds > 0) {
+        transfer_seconds_[static_cast<std::size_t>(b.device)] += transfer_seconds;
+        transfer_size_[static_cast<std::size_t>(b.device)] += std::max(b.request.size, 1.0);
+    }
+    bookings_.erase(it);
+}
+
+} // namespace tetiso

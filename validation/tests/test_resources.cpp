@@ -1,0 +1,253 @@
+// The node's resource manager on a simulated clock with synthetic devices:
+// it grants the device where a task would end first, learns each device's
+// times from finished tasks, never puts more units on a device than it has,
+// and serves waiting clients in the order they asked.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "tetiso/error.hpp"
+#include "tetiso/placement.hpp"
+#include "tetiso/resources.hpp"
+#include "tetiso/schedule.hpp"
+
+using namespace tetiso;
+
+namespace {
+
+constexpr int kDomain = 0;
+constexpr int kCpu = 0, kGpu = 1;
+
+ManagedDevice cpu(double processes) { return {"cpu", -1, processes, 0}; }
+ManagedDevice gpu(int index, double mib) { return {"gpu " + std::to_string(index), index, mib, 0}; }
+
+// Runs `count` tasks of `size` on `device` through the manager, each taking
+// `seconds`, so that its model there is calibrated.
+void calibrate(ResourceManager& manager, int device, double size, double seconds, int count = PerformanceModel::kMinSamples) {
+    for (int i = 0; i < count; ++i) {
+        ResourceRequest r{kDomain, size, std::vector<double>(manager.devices().size(), 0.0)};
+        r.units[static_cast<std::size_t>(device)] = 1;
+        const Grant g = manager.request(r, 0);
+        ASSERT_EQ(g.device, device);
+        ASSERT_TRUE(manager.start(g.ticket, 0));
+        manager.finish(g.ticket, seconds);
+    }
+}
+
+} // namespace
+
+TEST(PerformanceModel, NoPredictionBeforeEnoughSamples) {
+    PerformanceModel m;
+    EXPECT_FALSE(m.predict(100));
+    m.add(100, 2.0);
+    m.add(100, 4.0);
+    EXPECT_FALSE(m.predict(100));
+    m.add(100, 3.0);
+    ASSERT_TRUE(m.predict(100));
+    EXPECT_DOUBLE_EQ(*m.predict(100), 3.0); // the history's mean for a size it has seen
+}
+
+TEST(PerformanceModel, RegressionOverSizes) {
+    PerformanceModel m;
+    // seconds = 2e-6 * size^1.5: the fit in log-log space recovers it.
+    for (const double size : {1000.0, 2000.0, 4000.0}) m.add(size, 2e-6 * std::pow(size, 1.5));
+    ASSERT_TRUE(m.predict(8000));
+    EXPECT_NEAR(*m.predict(8000), 2e-6 * std::pow(8000.0, 1.5), 1e-6);
+    EXPECT_NEAR(*m.predict(1500), 2e-6 * std::pow(1500.0, 1.5), 1e-6);
+}
+
+TEST(ResourceManager, PicksTheFasterFreeDevice) {
+    ResourceManager manager({cpu(4), gpu(0, 1000)});
+    calibrate(manager, kCpu, 100, 1.0);
+    calibrate(manager, kGpu, 100, 0.1);
+    const Grant g = manager.request({kDomain, 100, {1, 200}}, 10.0);
+    EXPECT_EQ(g.device, kGpu);
+    EXPECT_DOUBLE_EQ(g.start, 10.0);
+    EXPECT_NEAR(g.predicted_seconds, 0.1, 1e-12);
+    // The same task where only the CPU is fast.
+    ResourceManager slow_gpu({cpu(4), gpu(0, 1000)});
+    calibrate(slow_gpu, kCpu, 100, 0.2);
+    calibrate(slow_gpu, kGpu, 100, 0.5);
+    EXPECT_EQ(slow_gpu.request({kDomain, 100, {1, 200}}, 0).device, kCpu);
+}
+
+TEST(ResourceManager, FallsBackToTheCpuWhenTheGpuQueueIsLong) {
+    // The GPU holds one task at a time (its memory) and takes 0.4 s; the CPU
+    // has four processes and takes 1 s. Two tasks queue on the GPU (ending
+    // at 0.4 and 0.8); a third would end there at 1.2, on the CPU at 1.0.
+    ResourceManager manager({cpu(4), gpu(0, 100)});
+    calibrate(manager, kCpu, 50, 1.0);
+    calibrate(manager, kGpu, 50, 0.4);
+    const ResourceRequest r{kDomain, 50, {1, 100}};
+    const Grant a = manager.request(r, 0);
+    const Grant b = manager.request(r, 0);
+    const Grant c = manager.request(r, 0);
+    EXPECT_EQ(a.device, kGpu);
+    EXPECT_DOUBLE_EQ(a.start, 0.0);
+    EXPECT_EQ(b.device, kGpu);
+    EXPECT_NEAR(b.start, 0.4, 1e-12); // t_b: when the first frees the memory
+    EXPECT_EQ(c.device, kCpu);
+    EXPECT_DOUBLE_EQ(c.start, 0.0);
+}
+
+TEST(ResourceManager, TransferTimeCounts) {
+    // The GPU computes faster, but moving the task there and back costs more
+    // than it saves; once a transfer has been measured it replaces the guess.
+    ResourceManager manager({cpu(1), {"gpu 0", 0, 1000, 0.0}});
+    calibrate(manager, kCpu, 100, 0.5);
+    calibrate(manager, kGpu, 100, 0.1);
+    EXPECT_EQ(manager.request({kDomain, 100, {1, 10}}, 0).device, kGpu);
+    ResourceManager measured({cpu(1), {"gpu 0", 0, 1000, 0.0}});
+    calibrate(measured, kCpu, 100, 0.5);
+    for (int i = 0; i < PerformanceModel::kMinSamples; ++i) {
+        const Grant g = measured.request({kDomain, 100, {0, 10}}, 0);
+        ASSERT_TRUE(measured.start(g.ticket, 0));
+        measured.finish(g.ticket, 0.1, 0.6);
+    }
+    EXPECT_NEAR(measured.predict(kDomain, 100, kGpu), 0.7, 1e-12);
+    EXPECT_EQ(measured.request({kDomain, 100, {1, 10}}, 0).device, kCpu);
+}
+
+TEST(ResourceManager, LearnsFromFinishedTasks) {
+    ResourceManager manager({cpu(2), gpu(0, 1000)});
+    // Nothing known: the uncalibrated guess, the same everywhere, and the
+    // tie goes to the device listed first.
+    EXPECT_DOUBLE_EQ(manager.predict(kDomain, 10, kGpu), ResourceManager::kUncalibratedSeconds);
+    calibrate(manager, kCpu, 10, 2.0);
+    EXPECT_DOUBLE_EQ(manager.predict(kDomain, 10, kCpu), 2.0);
+    // The GPU, not calibrated, is assumed faster than the fastest device
+    // known, so that it is tried next and learns.
+    EXPECT_DOUBLE_EQ(manager.predict(kDomain, 10, kGpu), 2.0 / ResourceManager::kUncalibratedSpeedup);
+    const Grant tried = manager.request({kDomain, 10, {1, 100}}, 0);
+    EXPECT_EQ(tried.device, kGpu);
+    manager.cancel(tried.ticket);
+    calibrate(manager, kGpu, 10, 0.25);
+    EXPECT_DOUBLE_EQ(manager.predict(kDomain, 10, kGpu), 0.25);
+    // A kind of its own has a model of its own.
+    EXPECT_DOUBLE_EQ(manager.predict(1, 10, kCpu), ResourceManager::kUncalibratedSeconds);
+    ASSERT_NE(manager.model(kDomain, kGpu), nullptr);
+    EXPECT_EQ(manager.model(kDomain, kGpu)->samples(), PerformanceModel::kMinSamples);
+}
+
+TEST(ResourceManager, UsesSeveralGpus) {
+    ResourceManager manager({cpu(8), gpu(0, 100), gpu(1, 100)});
+    calibrate(manager, kCpu, 10, 1.0);
+    calibrate(manager, 1, 10, 0.1);
+    calibrate(manager, 2, 10, 0.1);
+    const ResourceRequest r{kDomain, 10, {1, 100, 100}};
+    const Grant a = manager.request(r, 0);
+    const Grant b = manager.request(r, 0);
+    EXPECT_EQ(a.device, 1);
+    EXPECT_EQ(b.device, 2); // the other GPU is free now; the first only at 0.1
+    EXPECT_DOUBLE_EQ(b.start, 0.0);
+    const Grant c = manager.request(r, 0);
+    EXPECT_NEAR(c.start, 0.1, 1e-12); // both busy: the next on whichever frees first
+    EXPECT_NE(c.device, kCpu);
+}
+
+TEST(ResourceManager, ServesWaitingClientsInOrder) {
+    ResourceManager manager({gpu(0, 100)});
+    calibrate(manager, 0, 10, 1.0);
+    const Grant a = manager.request({kDomain, 10, {100}}, 0);
+    const Grant b = manager.request({kDomain, 10, {60}}, 0);
+    const Grant c = manager.request({kDomain, 10, {30}}, 0);
+    ASSERT_TRUE(manager.start(a.ticket, 0));
+    // c would fit beside b, but is not placed before it.
+    EXPECT_GE(c.start, b.start);
+    EXPECT_FALSE(manager.start(b.ticket, 0.5)); // a still holds the memory
+    EXPECT_FALSE(manager.start(c.ticket, 0.5)); // b waits before it
+    manager.finish(a.ticket, 0.5);
+    EXPECT_FALSE(manager.start(c.ticket, 0.5)); // still b's turn
+    EXPECT_TRUE(manager.start(b.ticket, 0.5));
+    EXPECT_TRUE(manager.start(c.ticket, 0.5)); // 60 + 30 <= 100
+}
+
+TEST(ResourceManager, NeverOversubscribes) {
+    // Clients ask at random times for random amounts; their tasks take
+    // anything from a tenth to three times the prediction. At every step of
+    // the simulated clock the units in use stay within each capacity.
+    ResourceManager manager({cpu(3), gpu(0, 1000), gpu(1, 500)});
+    std::mt19937 random(34);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    struct Running {
+        int ticket;
+        double end;
+    };
+    std::vector<Grant> waiting;
+    std::vector<Running> running;
+    int refused = 0, finished = 0;
+    for (int step = 0; step < 4000; ++step) {
+        const double now = step * 0.01;
+        for (auto it = running.begin(); it != running.end();) {
+            if (it->end <= now) {
+                manager.finish(it->ticket, 0.05 + unit(random));
+                it = running.erase(it);
+                ++finished;
+            } else {
+                ++it;
+            }
+        }
+        if (unit(random) < 0.3) {
+            const double size = 1 + std::floor(unit(random) * 4);
+            waiting.push_back(manager.request({kDomain, size, {1, 100 + 800 * unit(random), 100 + 400 * unit(random)}}, now));
+        }
+        for (auto it = waiting.begin(); it != waiting.end();) {
+            if (manager.start(it->ticket, now)) {
+                running.push_back({it->ticket, now + it->predicted_seconds * (0.1 + 2.9 * unit(random))});
+                it = waiting.erase(it);
+            } else {
+                ++refused;
+                ++it;
+            }
+        }
+        for (int d = 0; d < 3; ++d)
+            ASSERT_LE(manager.in_use(d), manager.devices()[static_cast<std::size_t>(d)].capacity + 1e-9) << "step " << step;
+    }
+    EXPECT_GT(finished, 200);
+    EXPECT_GT(refused, 0); // the capacities were reached, and held
+}
+
+TEST(ResourceManager, RefusesATaskNoDeviceCanHold) {
+    ResourceManager manager({cpu(1), gpu(0, 100)});
+    EXPECT_THROW(manager.request({kDomain, 10, {0, 200}}, 0), Error);
+    EXPECT_THROW(ResourceManager({}), Error);
+}
+
+// A node's devices and a job's requests (placement.hpp): the CPU holds the
+// node's workers; a GPU the memory left after each process's context, and
+// none where that leaves too little; a domain task may go anywhere, a seam
+// only to the CPU.
+TEST(NodePlacement, DevicesAndRequestsOfAJob) {
+    JobConfig config;
+    config.lattice = 21;
+    config.domains = 8;
+    const Job job(config);
+    const NodePlacement cpu_only(job, 3, 0, 0.0);
+    ASSERT_EQ(cpu_only.manager.devices().size(), 1u);
+    EXPECT_DOUBLE_EQ(cpu_only.manager.devices()[0].capacity, 3.0);
+
+    const NodePlacement two_gpus(job, 3, 2, 16000.0);
+    ASSERT_EQ(two_gpus.manager.devices().size(), 3u);
+    EXPECT_EQ(two_gpus.gpu_of(0), -1);
+    EXPECT_EQ(two_gpus.gpu_of(2), 1);
+    EXPECT_DOUBLE_EQ(two_gpus.manager.devices()[1].capacity, 16000.0 * 0.95 - 3 * kGpuContextMiB);
+
+    const int domain_task = job.task_count() - 1; // leaves come last (task_tree)
+    ASSERT_EQ(job.kind(domain_task), TaskKind::domain);
+    const ResourceRequest domain = two_gpus.request(domain_task, nullptr, nullptr);
+    EXPECT_EQ(domain.units[0], 1.0);
+    EXPECT_GT(domain.units[1], kGpuTaskMarginMiB);
+    EXPECT_EQ(domain.units[1], domain.units[2]);
+    EXPECT_DOUBLE_EQ(domain.size, static_cast<double>(job.partition().tet_count()) / 8);
+
+    ASSERT_EQ(job.kind(0), TaskKind::seam);
+    Piece left, right;
+    left.triangles = {0, 1, 2};
+    right.triangles = {0, 1, 2, 0, 2, 3};
+    const ResourceRequest seam = two_gpus.request(0, &left, &right);
+    EXPECT_EQ(seam.units, (std::vector<double>{1, 0, 0}));
+    EXPECT_DOUBLE_EQ(seam.size, 3.0);
+
+    EXPECT_EQ(NodePlacement(job, 8, 1, 4000.0).manager.devices().size(), 1u); // 8 contexts leave no room
+}
