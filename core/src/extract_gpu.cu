@@ -440,8 +440,10 @@ GpuInfo gpu_info(int device) {
     cudaDeviceProp prop{};
     if (cudaGetDeviceProperties(&prop, device) != cudaSuccess)
         return {false, "CUDA device " + std::to_string(device) + " cannot be queried"};
-    return {true, std::string(prop.name) + ", " + std::to_string(prop.totalGlobalMem >> 20) + " MiB, compute capability " +
-                      std::to_string(prop.major) + "." + std::to_string(prop.minor)};
+    return {true,
+            std::string(prop.name) + ", " + std::to_string(prop.totalGlobalMem >> 20) + " MiB, compute capability " +
+                std::to_string(prop.major) + "." + std::to_string(prop.minor),
+            prop.totalGlobalMem};
 }
 
 int gpu_count() {

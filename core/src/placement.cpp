@@ -2,7 +2,6 @@
 #include "tetiso/placement.hpp"
 
 #include <algorithm>
-#include <regex>
 
 #include "tetiso/gpu.hpp"
 
@@ -10,11 +9,7 @@ namespace tetiso {
 
 double gpu_memory_mib(int gpu) {
     const GpuInfo info = gpu_info(gpu);
-    if (!info.available) return 0;
-    // gpu_info describes a device as "NAME, M MiB, compute capability X.Y".
-    static const std::regex mib(R"((\d+) MiB)");
-    std::smatch match;
-    return std::regex_search(info.description, match, mib) ? std::stod(match[1].str()) : 0;
+    return info.available ? static_cast<double>(info.memory_bytes) / (1 << 20) : 0;
 }
 
 namespace {

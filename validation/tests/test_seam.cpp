@@ -219,7 +219,8 @@ TEST(Seam, RawSamplesTravelThroughTheSeamAndStayNearOpenInterfaces) {
     ReduceOptions options;
     options.max_error = 0.25 * lattice.spacing();
     options.keep_samples = true;
-    const SeamOptions seam_options{true, options};
+    SeamOptions seam_options;
+    seam_options.reduce_options = options;
     const int first = 0, second = four.neighbours(0).front();
     std::vector<Piece> raw(2), reduced(2);
     for (int k = 0; k < 2; ++k) {

@@ -17,6 +17,7 @@
 // so and a Gpu cannot be made.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <vector>
@@ -31,6 +32,7 @@ namespace tetiso {
 struct GpuInfo {
     bool available = false;
     std::string description; // the device's name and memory, or why there is none
+    std::size_t memory_bytes = 0; // the device's global memory (0 where none)
 };
 
 // Whether this build has the CUDA backend and the machine CUDA device
