@@ -60,11 +60,21 @@ same "reduce" reduce "$work/raw.ply"
 if [ -n "$mpiexec" ]; then
     # Three ranks, two of them workers on the one GPU, against one process
     # on the CPU.
-    "$tetiso" run --lattice 60 --domains 8 --quiet -o "$work/alone.ply" || fail "run alone"
-    OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "$mpiexec" --oversubscribe -np 3 \
-        "$tetiso" run --lattice 60 --domains 8 --quiet --device gpu -o "$work/ranks.ply" 2>"$work/err" ||
-        fail "run under mpirun --device gpu: $(cat "$work/err")"
-    cmp -s "$work/alone.ply" "$work/ranks.ply" || fail "run under mpirun with the GPU differs from one CPU process"
+    "$tetiso" run --lattice 60 --domains 8 --quiet --device cpu -o "$work/alone.ply" || fail "run alone"
+    for device in gpu auto; do
+        OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "$mpiexec" --oversubscribe -np 3 \
+            "$tetiso" run --lattice 60 --domains 8 --quiet --device $device -o "$work/ranks.ply" \
+            --report "$work/ranks.json" 2>"$work/err" || fail "run under mpirun --device $device: $(cat "$work/err")"
+        cmp -s "$work/alone.ply" "$work/ranks.ply" ||
+            fail "run under mpirun --device $device differs from one CPU process"
+    done
 fi
+# The resource manager's choice, task by task: the surface whatever it is,
+# and with a GPU at hand some domain tasks on it.
+"$tetiso" run --lattice 60 --domains 27 --quiet --device cpu -o "$work/cpu.ply" || fail "run on the CPU"
+"$tetiso" run --lattice 60 --domains 27 --quiet --device auto -o "$work/auto.ply" --report "$work/auto.json" \
+    2>"$work/err" || fail "run --device auto: $(cat "$work/err")"
+cmp -s "$work/cpu.ply" "$work/auto.ply" || fail "run --device auto differs from --device cpu"
+grep -q '"device": "gpu 0"' "$work/auto.json" || fail "run --device auto: no task ran on the GPU"
 [ "$failures" -eq 0 ] && echo "the GPU wrote the CPU's bytes everywhere" && exit 0
 exit 1
