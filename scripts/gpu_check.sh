@@ -39,7 +39,7 @@ prepare() {
     done
     # Debian's libraries that the device has not (or not under this soname).
     for p in "${programs[@]}"; do ldd "$carry/bin/$p"; done | awk '{print $3}' | sort -u |
-        grep -E 'libmuparser|libmetis|libmeshoptimizer|libbenchmark|libmpi_cxx|libGKlib' |
+        grep -E 'libmuparser|libmetis|libmeshoptimizer|libbenchmark|libmpi_cxx|libGKlib|libpugixml' |
         while read -r lib; do cp -L "$lib" "$carry/lib/"; done
     # What travels to the device is limited in size: stripped and packed.
     strip "$carry"/bin/*
