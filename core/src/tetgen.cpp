@@ -3,6 +3,8 @@
 // header is checked against the lines that follow before it sizes anything.
 #include "tetiso/tetgen.hpp"
 
+#include "tetiso/mesh_file.hpp"
+
 #include <cmath>
 #include <limits>
 #include <string>
@@ -21,20 +23,6 @@ using detail::TableFile;
 void check_count(const TableFile& file, std::int64_t count, const char* what) {
     if (count < 0) file.fail(std::string("negative number of ") + what);
     if (count > std::numeric_limits<std::int32_t>::max()) file.fail(std::string("more ") + what + " than one domain can hold");
-}
-
-double orientation(const Domain& d, std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t e) {
-    const auto p = [&](std::int32_t v, int axis) {
-        const auto i = static_cast<std::size_t>(v);
-        return static_cast<double>(axis == 0 ? d.x[i] : axis == 1 ? d.y[i] : d.z[i]);
-    };
-    double u[3], v[3], w[3];
-    for (int k = 0; k < 3; ++k) {
-        u[k] = p(b, k) - p(a, k);
-        v[k] = p(c, k) - p(a, k);
-        w[k] = p(e, k) - p(a, k);
-    }
-    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]);
 }
 
 } // namespace
@@ -118,7 +106,7 @@ Domain read_tetgen(const TetgenSource& source) {
         }
         // Extraction orients triangles from a positively oriented reference
         // tetrahedron; TetGen's own order is not that, so fix it here.
-        if (orientation(domain, v[0], v[1], v[2], v[3]) < 0) std::swap(v[2], v[3]);
+        if (negatively_oriented(domain, v[0], v[1], v[2], v[3])) std::swap(v[2], v[3]);
         domain.tets.insert(domain.tets.end(), v, v + 4);
     }
     return domain;

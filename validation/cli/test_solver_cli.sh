@@ -13,26 +13,8 @@ solver=$(cd "$(dirname "$0")/../../meshes/solver" && pwd)
 failures=0
 passed=0
 
-expect() {
-    local status=$1 what=$2
-    shift 3
-    rm -rf "$work/out" && mkdir -p "$work/out"
-    "$@" >"$work/stdout" 2>"$work/stderr"
-    local got=$?
-    local problem=""
-    [ "$got" -eq "$status" ] || problem="exit status $got, expected $status"
-    if [ -z "$problem" ] && [ "$status" -ne 0 ]; then
-        [ "$(wc -l <"$work/stderr")" -eq 1 ] || problem="stderr is not one line: $(cat "$work/stderr")"
-        [ -z "$(ls -A "$work/out")" ] || problem="left files behind: $(ls -A "$work/out")"
-    fi
-    if [ -n "$problem" ]; then
-        echo "FAIL: $what: $problem"
-        sed 's/^/  | /' "$work/stderr"
-        failures=$((failures + 1))
-    else
-        passed=$((passed + 1))
-    fi
-}
+# shellcheck source=cli_support.sh
+source "$(dirname "$0")/cli_support.sh"
 same() { # same DESCRIPTION A B
     if cmp -s "$2" "$3"; then passed=$((passed + 1)); else echo "FAIL: $1: $2 and $3 differ"; failures=$((failures + 1)); fi
 }
