@@ -1,10 +1,12 @@
 // The `tetiso` command: argument parsing and error reporting only; every
 // stage lives in the library. Any error is one line on stderr and exit 2.
+#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <string>
+#include <thread>
 
 #include "commands.hpp"
 #include "tetiso/error.hpp"
@@ -17,6 +19,16 @@ bool is_secondary_rank() {
     for (const char* variable : {"OMPI_COMM_WORLD_RANK", "PMI_RANK", "PMIX_RANK"})
         if (const char* value = std::getenv(variable)) return std::atoi(value) != 0;
     return false;
+}
+
+// The exit status of a secondary rank for an error every rank meets, which
+// rank 0 reports: given after a moment, since the launcher aborts the job at
+// the first non-zero exit and would otherwise kill rank 0 before it has said
+// what went wrong. (Where rank 0 has not met the error, its own checks end
+// the job within seconds: the start-up barrier, the controller's.)
+int secondary_rank_exit(int status) {
+    std::this_thread::sleep_for(std::chrono::seconds(2));
+    return status;
 }
 
 // A message on one line whatever it quotes: a newline, a carriage return or
@@ -69,7 +81,8 @@ int main(int argc, char** argv) {
     } catch (const CLI::CallForVersion& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        if (!is_secondary_rank()) std::cerr << "tetiso: " << one_line(e.what()) << " (see tetiso --help)\n";
+        if (is_secondary_rank()) return secondary_rank_exit(2);
+        std::cerr << "tetiso: " << one_line(e.what()) << " (see tetiso --help)\n";
         return 2;
     }
     try {
@@ -80,7 +93,8 @@ int main(int argc, char** argv) {
         // rank 0 before it could say which task failed, and why.
         return 0;
     } catch (const tetiso::Error& e) {
-        if (!is_secondary_rank()) std::cerr << "tetiso: " << one_line(e.what()) << '\n';
+        if (is_secondary_rank()) return secondary_rank_exit(2);
+        std::cerr << "tetiso: " << one_line(e.what()) << '\n';
         return 2;
     } catch (const std::bad_alloc&) {
         std::cerr << "tetiso: out of memory\n";
