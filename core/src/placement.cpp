@@ -2,7 +2,9 @@
 #include "tetiso/placement.hpp"
 
 #include <algorithm>
+#include <cmath>
 
+#include "tetiso/error.hpp"
 #include "tetiso/gpu.hpp"
 
 namespace tetiso {
@@ -14,20 +16,22 @@ double gpu_memory_mib(int gpu) {
 
 namespace {
 
-std::vector<ManagedDevice> node_devices(int processes, int gpus, double gpu_mib) {
-    std::vector<ManagedDevice> devices{{"cpu", -1, static_cast<double>(std::max(1, processes)), 0}};
-    const double per_gpu = gpu_mib * 0.95 - kGpuContextMiB * std::max(1, processes);
-    if (per_gpu > kGpuTaskMarginMiB)
-        for (int g = 0; g < gpus; ++g) devices.push_back({"gpu " + std::to_string(g), g, per_gpu, 0});
+std::vector<ManagedDevice> node_devices(int cpu_processes, const std::vector<int>& gpus) {
+    std::vector<ManagedDevice> devices{{"cpu", -1, static_cast<double>(std::max(1, cpu_processes)), 0}};
+    for (const int g : gpus) devices.push_back({"gpu " + std::to_string(g), g, 1, 0});
     return devices;
 }
 
 } // namespace
 
-NodePlacement::NodePlacement(const Job& job, int processes, int gpus, double gpu_mib)
-    : manager(node_devices(processes, gpus, gpu_mib)),
+NodePlacement::NodePlacement(const Job& job, int cpu_processes, const std::vector<int>& gpus, double gpu_mib,
+                             bool domains_on_cpu)
+    : manager(node_devices(cpu_processes, gpus)),
       job_(job),
-      domain_tets_(std::max(1.0, static_cast<double>(job.partition().tet_count()) / job.partition().domain_count())) {}
+      domain_tets_(std::max(1.0, static_cast<double>(job.partition().tet_count()) / job.partition().domain_count())),
+      task_mib_(domain_tets_ * kGpuBytesPerTet / (1 << 20) + kGpuTaskMarginMiB),
+      usable_mib_(gpu_mib * 0.95 - kGpuContextMiB),
+      domains_on_cpu_(domains_on_cpu) {}
 
 ResourceRequest NodePlacement::request(int task, const Piece* left, const Piece* right) const {
     ResourceRequest r;
@@ -41,8 +45,13 @@ ResourceRequest NodePlacement::request(int task, const Piece* left, const Piece*
     // Domains differ little in size (bisection or METIS balances them):
     // the mean is the task's size, and the models see each kind of task.
     r.size = domain_tets_;
-    const double mib = domain_tets_ * kGpuBytesPerTet / (1 << 20) + kGpuTaskMarginMiB;
-    for (std::size_t d = 1; d < r.units.size(); ++d) r.units[d] = mib;
+    if (!domains_on_cpu_) r.units[0] = 0;
+    const bool fits = task_mib_ <= usable_mib_;
+    for (std::size_t d = 1; d < r.units.size(); ++d) r.units[d] = fits ? 1 : 0;
+    if (!domains_on_cpu_ && (!fits || r.units.size() < 2))
+        throw Error("--device gpu: " + job_.describe(task) + " needs about " + std::to_string(std::lround(task_mib_)) +
+                    " MiB of GPU memory, more than the " + std::to_string(std::lround(std::max(0.0, usable_mib_))) +
+                    " MiB a GPU of its node has for tasks");
     return r;
 }
 

@@ -29,6 +29,7 @@
 #include <deque>
 #include <limits>
 #include <map>
+#include <set>
 #include <thread>
 
 #include "tetiso/placement.hpp"
@@ -256,7 +257,16 @@ private:
     int most_ = per_worker_;
 };
 
-void work(const Job& job) {
+// gpu: the GPU this worker drives (-1 for none), made ready before it says
+// it is ready: its first task there then takes what its next ones take.
+void work(const Job& job, int gpu) {
+    if (gpu >= 0) {
+        try {
+            job.prepare_gpu(gpu);
+        } catch (const std::exception&) {
+            // Its tasks there fail with the same error, which rank 0 reports.
+        }
+    }
     // The first "ready" names this worker's cores, which rank 0 lends to
     // other ranks when this worker has nothing to do (Controller).
     send(cores_message(), 0, kReady);
@@ -384,43 +394,86 @@ private:
     struct sigaction previous_[std::size(kSignals)];
 };
 
-// Which node each rank is on and each node's GPUs, on rank 0: ranks that
-// share memory (MPI_COMM_TYPE_SHARED) are a node, named by its lowest rank.
-// A node's GPUs are counted, and their memory taken, on every rank there;
-// the smallest answer stands, in case ranks see different devices.
+// How many of a node's worker processes drive a GPU, one GPU each. One
+// process per GPU keeps the device's context, kernels and buffers warm from
+// task to task and runs its tasks one after another (placement.hpp says
+// why); at least one worker is left for the seams, which run on the CPU. A
+// lone worker drives none: it runs the tasks granted to its node's GPUs
+// itself, as the only process that uses them.
+int driver_count(int workers, int gpus) { return workers >= 2 ? std::min(gpus, workers - 1) : 0; }
+
+// The GPUs a node's tasks may use: every one under --device auto, the one
+// --gpu names under --device gpu.
+std::vector<int> usable_gpus(const JobConfig& config, int count) {
+    std::vector<int> gpus;
+    for (int g = 0; g < count; ++g)
+        if (config.device != JobConfig::Device::gpu || g == config.gpu) gpus.push_back(g);
+    return gpus;
+}
+
+// Which node each rank is on, each node's GPUs and which rank drives each:
+// ranks that share memory (MPI_COMM_TYPE_SHARED) are a node, named by its
+// lowest rank, and its lowest worker ranks drive its GPUs. A node's GPUs are
+// counted, and their memory taken, on every rank there; the smallest answer
+// stands, in case ranks see different devices. Every rank learns the GPU it
+// drives; rank 0 learns the whole layout.
 struct NodeLayout {
-    std::vector<int> node_of;     // by rank
-    std::vector<int> workers;     // by node: its worker ranks (rank 0 is none)
-    std::vector<int> gpus;        // by node
-    std::vector<double> gpu_mib;  // by node: the smallest GPU's memory
+    int my_gpu = -1;                     // the GPU this rank drives, -1 for none
+    std::vector<int> node_of;            // by rank
+    std::vector<int> driving;            // by rank: the GPU it drives, -1 for none
+    std::vector<int> workers;            // by node: its worker ranks (rank 0 is none)
+    std::vector<std::vector<int>> gpus;  // by node: the GPUs its resource manager places tasks on
+    std::vector<double> gpu_mib;         // by node: the smallest GPU's memory
 };
 
-NodeLayout node_layout(int rank, int ranks) {
+NodeLayout node_layout(int rank, int ranks, const JobConfig& config) {
     MPI_Comm local;
-    MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &local);
-    int leader = rank;
+    MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank, MPI_INFO_NULL, &local);
+    int leader = rank, local_rank = 0, local_size = 1;
     MPI_Allreduce(&rank, &leader, 1, MPI_INT, MPI_MIN, local);
+    MPI_Comm_rank(local, &local_rank);
+    MPI_Comm_size(local, &local_size);
+    const int seen = gpu_count();
+    int count = 0;
+    MPI_Allreduce(&seen, &count, 1, MPI_INT, MPI_MIN, local);
+    const std::vector<int> usable = usable_gpus(config, count);
+    const int seen_mib = usable.empty() ? 0 : static_cast<int>(gpu_memory_mib(usable.front()));
+    int mib = 0;
+    MPI_Allreduce(&seen_mib, &mib, 1, MPI_INT, MPI_MIN, local);
     MPI_Comm_free(&local);
-    const int gpus = gpu_count();
-    const int mine[3] = {leader, gpus, gpus > 0 ? static_cast<int>(gpu_memory_mib(0)) : 0};
-    std::vector<int> all(3 * static_cast<std::size_t>(ranks));
-    MPI_Gather(mine, 3, MPI_INT, all.data(), 3, MPI_INT, 0, MPI_COMM_WORLD);
+    // Ranks keep their order within the node (the split's key), and rank 0,
+    // the lowest, is no worker.
+    const int with_controller = leader == 0 ? 1 : 0;
+    const int worker_index = local_rank - with_controller;
+    const int drivers = driver_count(local_size - with_controller, static_cast<int>(usable.size()));
     NodeLayout layout;
+    if (rank != 0 && worker_index < drivers) layout.my_gpu = usable[static_cast<std::size_t>(worker_index)];
+
+    const int mine[4] = {leader, count, mib, layout.my_gpu};
+    std::vector<int> all(4 * static_cast<std::size_t>(ranks));
+    MPI_Gather(mine, 4, MPI_INT, all.data(), 4, MPI_INT, 0, MPI_COMM_WORLD);
     if (rank != 0) return layout;
     std::map<int, int> node_of_leader;
+    std::vector<int> gpu_count_of; // by node
     for (int r = 0; r < ranks; ++r) {
-        const int* row = &all[3 * static_cast<std::size_t>(r)];
-        const auto [it, added] = node_of_leader.try_emplace(row[0], static_cast<int>(layout.gpus.size()));
+        const int* row = &all[4 * static_cast<std::size_t>(r)];
+        const auto [it, added] = node_of_leader.try_emplace(row[0], static_cast<int>(layout.workers.size()));
         if (added) {
             layout.workers.push_back(0);
-            layout.gpus.push_back(row[1]);
+            gpu_count_of.push_back(row[1]);
             layout.gpu_mib.push_back(row[2]);
         }
-        const auto node = static_cast<std::size_t>(it->second);
         layout.node_of.push_back(it->second);
-        if (r != 0) ++layout.workers[node];
-        layout.gpus[node] = std::min(layout.gpus[node], row[1]);
-        layout.gpu_mib[node] = std::min(layout.gpu_mib[node], static_cast<double>(row[2]));
+        layout.driving.push_back(row[3]);
+        if (r != 0) ++layout.workers[static_cast<std::size_t>(it->second)];
+    }
+    for (std::size_t node = 0; node < layout.workers.size(); ++node) {
+        std::vector<int> gpus = usable_gpus(config, gpu_count_of[node]);
+        const int drivers = driver_count(layout.workers[node], static_cast<int>(gpus.size()));
+        // GPUs beyond the drivers stay unused: a worker that ran their tasks
+        // would be a second process on them.
+        if (layout.workers[node] >= 2) gpus.resize(static_cast<std::size_t>(drivers));
+        layout.gpus.push_back(std::move(gpus));
     }
     return layout;
 }
@@ -429,8 +482,9 @@ NodeLayout node_layout(int rank, int ranks) {
 // worker holds which task, and the cores idle workers lend.
 class Controller {
 public:
-    // nodes: with --device auto, which node each rank is on and its GPUs:
-    // one resource manager per node then places that node's workers' tasks.
+    // nodes: with --device auto or gpu, which node each rank is on, its GPUs
+    // and which ranks drive them: one resource manager per node then places
+    // that node's tasks.
     Controller(const Job& job, int ranks, const Progress& progress, const std::optional<NodeLayout>& nodes)
         : job_(job), ranks_(ranks), progress_(progress), start_(clock::now()), queue_(job),
           pieces_(static_cast<std::size_t>(job.task_count())), greeted_(static_cast<std::size_t>(ranks), false),
@@ -440,8 +494,18 @@ public:
         result_.ranks = ranks;
         if (nodes) {
             node_of_ = nodes->node_of;
-            for (std::size_t node = 0; node < nodes->gpus.size(); ++node)
-                placements_.emplace_back(job, nodes->workers[node], nodes->gpus[node], nodes->gpu_mib[node]);
+            driving_ = nodes->driving;
+            const bool domains_on_cpu = job.config().device == JobConfig::Device::automatic;
+            for (std::size_t node = 0; node < nodes->gpus.size(); ++node) {
+                int drivers = 0;
+                for (int r = 0; r < ranks; ++r)
+                    if (node_of_[static_cast<std::size_t>(r)] == static_cast<int>(node) && driving_[static_cast<std::size_t>(r)] >= 0) {
+                        ++drivers;
+                        driver_of_gpu_[{static_cast<int>(node), driving_[static_cast<std::size_t>(r)]}] = r;
+                    }
+                placements_.emplace_back(job, nodes->workers[node] - drivers, nodes->gpus[node], nodes->gpu_mib[node],
+                                         domains_on_cpu);
+            }
         }
     }
 
@@ -451,7 +515,14 @@ public:
                 execute_here();
                 continue;
             }
-            while (failure_.empty() && !idle_.empty() && queue_.has_ready()) dispatch(take_idle());
+            if (placements_.empty())
+                while (failure_.empty() && !idle_.empty() && queue_.has_ready()) dispatch(take_idle());
+            else
+                while (failure_.empty() && queue_.has_ready()) {
+                    const int node = node_with_room();
+                    if (node < 0) break;
+                    place(node);
+                }
             if (failure_.empty()) start_granted();
             else cancel_waiting();
             if (failure_.empty() && !queue_.has_ready()) lend_idle_cores();
@@ -480,6 +551,13 @@ public:
 
 private:
     using clock = std::chrono::steady_clock;
+
+    // A task's grant, from its request to its result.
+    struct Placed {
+        int task = 0, node = 0;
+        Grant grant;
+        double asked_at = 0, sent_at = 0;
+    };
 
     double seconds() const { return std::chrono::duration<double>(clock::now() - start_).count(); }
     std::optional<Piece>& piece(int task) { return pieces_[static_cast<std::size_t>(task)]; }
@@ -548,15 +626,18 @@ private:
     // among equals), which takes them at its next reduction round
     // (LentCores). The domain tasks' times vary by a third with the machine's
     // noise, not with the domain, so the phase's end is uneven whatever the
-    // order: 1.2-1.7 s of idle workers at 250 domains and 15 workers, 3.2 s
-    // at 125. A lent core comes back when its borrower's task ends; a lender
-    // given a seam meanwhile shares it for that seam's time.
+    // order. A lent core comes back when its borrower's task ends; a lender
+    // given a seam meanwhile shares it for that seam's time. A GPU's driver
+    // neither lends (a task for its GPU may come at any moment) nor borrows
+    // (its task runs on the GPU).
     void lend_idle_cores() {
         for (const int lender : idle_) {
-            if (lent_to_[static_cast<std::size_t>(lender)] >= 0 || !cores_known_[static_cast<std::size_t>(lender)]) continue;
+            if (lent_to_[static_cast<std::size_t>(lender)] >= 0 || !cores_known_[static_cast<std::size_t>(lender)] ||
+                drives_gpu(lender))
+                continue;
             int borrower = -1;
             for (const auto& [worker, task] : running_) {
-                if (!cores_known_[static_cast<std::size_t>(worker)]) continue;
+                if (!cores_known_[static_cast<std::size_t>(worker)] || on_gpu_.count(worker) > 0) continue;
                 if (borrower < 0 || lends_[worker] < lends_[borrower] ||
                     (lends_[worker] == lends_[borrower] && dispatched_at_[worker] > dispatched_at_[borrower]))
                     borrower = worker;
@@ -586,49 +667,107 @@ private:
         return worker;
     }
 
-    // Hands the next task to `worker`: at once, or, with --device auto,
-    // once its node's manager has granted it a device.
+    // Hands the next task to `worker` (--device cpu: no placement).
     void dispatch(int worker) {
-        const int task = queue_.pop();
-        if (placements_.empty()) {
-            const JobConfig& c = job_.config();
-            send_task(worker, task, c.device == JobConfig::Device::gpu ? c.gpu : -1);
-            return;
+        send_task(worker, queue_.pop(), -1);
+    }
+
+    bool drives_gpu(int worker) const {
+        return !driving_.empty() && driving_[static_cast<std::size_t>(worker)] >= 0;
+    }
+
+    // The rank that drives the GPU of a node's manager device, -1 where none
+    // does (the CPU, or the GPUs of a node with a lone worker).
+    int driver_of(int node, int device) const {
+        const int gpu = placements_[static_cast<std::size_t>(node)].gpu_of(device);
+        const auto it = driver_of_gpu_.find({node, gpu});
+        return gpu < 0 || it == driver_of_gpu_.end() ? -1 : it->second;
+    }
+
+    // A node that can take another task: one of its processes is idle and
+    // not already promised to a grant that waits (a driver to one for its
+    // GPU; the other workers to those for the CPU). Placing a task only then,
+    // not as soon as it is ready, keeps each device's queue as short as the
+    // predictions make it worth, and lets a task's place be decided with
+    // the latest models. Nodes are served in the order their processes
+    // became idle.
+    int node_with_room() const {
+        std::map<int, int> free_workers; // node -> idle workers that drive no GPU, less the grants waiting for one
+        std::map<int, int> waiting_for;  // driver -> grants waiting for it
+        for (const int worker : idle_)
+            if (!drives_gpu(worker)) ++free_workers[node_of_[static_cast<std::size_t>(worker)]];
+        for (const Placed& p : waiting_) {
+            if (const int driver = driver_of(p.node, p.grant.device); driver >= 0)
+                ++waiting_for[driver];
+            else
+                --free_workers[p.node];
         }
+        for (const int worker : idle_) {
+            const bool room = drives_gpu(worker) ? waiting_for[worker] == 0
+                                                 : free_workers[node_of_[static_cast<std::size_t>(worker)]] > 0;
+            if (room) return node_of_[static_cast<std::size_t>(worker)];
+        }
+        return -1;
+    }
+
+    // Asks `node`'s manager where and when the next task runs; it waits for
+    // that grant in waiting_.
+    void place(int node) {
+        const int task = queue_.pop();
         const TaskNode& n = job_.node(task);
-        const int node = node_of_[static_cast<std::size_t>(worker)];
         NodePlacement& placement = placements_[static_cast<std::size_t>(node)];
         const Piece* left = n.left >= 0 ? &*piece(n.left) : nullptr;
         const Piece* right = n.right >= 0 ? &*piece(n.right) : nullptr;
-        const Grant grant = placement.manager.request(placement.request(task, left, right), seconds());
-        placed_[worker] = Placed{task, node, grant, seconds(), 0};
-        waiting_.push_back(worker);
+        Placed p;
+        p.task = task;
+        p.node = node;
+        try {
+            p.grant = placement.manager.request(placement.request(task, left, right), seconds());
+        } catch (const Error& e) {
+            fail(task, 0, e.what());
+            return;
+        }
+        p.asked_at = seconds();
+        waiting_.push_back(p);
+    }
+
+    // The idle rank that runs a grant now: its GPU's driver, or an idle
+    // worker of its node that drives none (one whose cores are not lent out
+    // where there is one); -1 while none is idle.
+    int executor_of(const Placed& p) const {
+        if (const int driver = driver_of(p.node, p.grant.device); driver >= 0)
+            return std::find(idle_.begin(), idle_.end(), driver) != idle_.end() ? driver : -1;
+        int lent = -1;
+        for (const int worker : idle_) {
+            if (drives_gpu(worker) || node_of_[static_cast<std::size_t>(worker)] != p.node) continue;
+            if (lent_to_[static_cast<std::size_t>(worker)] < 0) return worker;
+            if (lent < 0) lent = worker;
+        }
+        return lent;
     }
 
     // Sends the tasks whose grants their devices admit now, in the order
     // they were asked for (the manager keeps each device's order).
     void start_granted() {
         for (auto it = waiting_.begin(); it != waiting_.end();) {
-            Placed& p = placed_.at(*it);
+            Placed& p = *it;
             NodePlacement& placement = placements_[static_cast<std::size_t>(p.node)];
-            if (!placement.manager.start(p.grant.ticket, seconds())) {
+            const int worker = executor_of(p);
+            if (worker < 0 || !placement.manager.start(p.grant.ticket, seconds())) {
                 ++it;
                 continue;
             }
             p.sent_at = seconds();
-            send_task(*it, p.task, placement.gpu_of(p.grant.device));
+            idle_.erase(std::find(idle_.begin(), idle_.end(), worker));
+            placed_[worker] = p;
+            send_task(worker, p.task, placement.gpu_of(p.grant.device));
             it = waiting_.erase(it);
         }
     }
 
     // After a failure no task is sent: those waiting for a grant give it up.
     void cancel_waiting() {
-        for (const int worker : waiting_) {
-            const Placed& p = placed_.at(worker);
-            placements_[static_cast<std::size_t>(p.node)].manager.cancel(p.grant.ticket);
-            placed_.erase(worker);
-            idle_.push_back(worker);
-        }
+        for (const Placed& p : waiting_) placements_[static_cast<std::size_t>(p.node)].manager.cancel(p.grant.ticket);
         waiting_.clear();
     }
 
@@ -648,6 +787,7 @@ private:
         }
         send(out.bytes, worker, kTask);
         running_[worker] = task;
+        if (gpu >= 0) on_gpu_.insert(worker);
         in_flight_.update(job_, running_, ranks_);
         dispatched_at_[worker] = seconds();
     }
@@ -692,6 +832,7 @@ private:
         piece(record.task) = in.get_piece();
         result_.tasks.push_back(record);
         running_.erase(worker);
+        on_gpu_.erase(worker);
         in_flight_.update(job_, running_, ranks_);
         end_lends_to(worker);
         queue_.complete(record.task);
@@ -707,6 +848,7 @@ private:
             placed_.erase(it);
         }
         running_.erase(worker);
+        on_gpu_.erase(worker);
         in_flight_.update(job_, running_, ranks_);
         end_lends_to(worker);
     }
@@ -745,17 +887,15 @@ private:
     std::vector<int> lent_to_;           // lender -> borrower
     std::map<int, int> lends_;           // borrower -> lends it has
     std::map<int, double> dispatched_at_; // worker -> when its task was sent
-    // --device auto: a manager per node, and each worker's grant from the
-    // request to its task's result.
-    struct Placed {
-        int task = 0, node = 0;
-        Grant grant;
-        double asked_at = 0, sent_at = 0;
-    };
+    std::set<int> on_gpu_;                // workers whose task runs on a GPU
+    // --device auto or gpu: a manager per node, the ranks that drive its
+    // GPUs, and each task's grant from the request to its result.
     std::vector<int> node_of_;                 // by rank
+    std::vector<int> driving_;                 // by rank: the GPU it drives, -1 for none
+    std::map<std::pair<int, int>, int> driver_of_gpu_; // (node, CUDA index) -> rank
     std::deque<NodePlacement> placements_;     // by node
-    std::map<int, Placed> placed_;             // worker -> its task's grant
-    std::deque<int> waiting_;                  // workers whose task waits for its grant, in order
+    std::map<int, Placed> placed_;             // worker -> the grant of the task it runs
+    std::deque<Placed> waiting_;               // grants not started yet, in the order asked
 };
 
 } // namespace
@@ -863,9 +1003,9 @@ std::optional<JobResult> run_mpi(const Job& job, const Progress& progress) {
                     "between them); no task was run");
     }
     std::optional<NodeLayout> nodes;
-    if (job.config().device == JobConfig::Device::automatic) nodes = node_layout(rank, ranks);
+    if (job.config().device != JobConfig::Device::cpu) nodes = node_layout(rank, ranks, job.config());
     if (rank != 0) {
-        work(job);
+        work(job, nodes ? nodes->my_gpu : -1);
         return std::nullopt;
     }
     return Controller(job, ranks, progress, nodes).run();

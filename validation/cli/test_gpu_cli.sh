@@ -57,16 +57,43 @@ same "run, unstructured mesh" run --mesh "$(dirname "$0")/../../meshes/cube.1" -
 same "extract --reduce" extract --lattice 60 --domains 4 --reduce
 "$tetiso" extract --lattice 50 --field torus -o "$work/raw.ply" || fail "extract"
 same "reduce" reduce "$work/raw.ply"
+# one_driver REPORT DEVICE RANKS: every task on the GPU ran on one rank (the
+# GPU's driver: rank 1, the node's lowest worker, where there are two workers
+# or more), some did, and under --device gpu every domain task did.
+one_driver() {
+    /usr/bin/python3 - "$@" <<'PY' || fail "mpirun -np $3 --device $2: $(cat "$1.why")"
+import json, sys
+report, device, ranks = json.load(open(sys.argv[1])), sys.argv[2], int(sys.argv[3])
+on_gpu = [t for t in report["tasks"] if t["device"] != "cpu"]
+why = None
+if not on_gpu:
+    why = "no task ran on the GPU"
+elif len({t["rank"] for t in on_gpu}) != 1 or (ranks > 2 and on_gpu[0]["rank"] != 1):
+    why = "GPU tasks ran on ranks %s, not on one driver" % sorted({t["rank"] for t in on_gpu})
+elif device == "gpu" and any(t["kind"] == "domain" and t["device"] == "cpu" for t in report["tasks"]):
+    why = "a domain task ran on the CPU under --device gpu"
+open(sys.argv[1] + ".why", "w").write(why or "")
+sys.exit(1 if why else 0)
+PY
+}
+
 if [ -n "$mpiexec" ]; then
-    # Three ranks, two of them workers on the one GPU, against one process
-    # on the CPU.
+    # Two ranks (a lone worker, which runs the GPU's tasks itself), three
+    # and five (the lowest worker drives the GPU, the others run the CPU's
+    # tasks), against one process on the CPU.
     "$tetiso" run --lattice 60 --domains 8 --quiet --device cpu -o "$work/alone.ply" || fail "run alone"
-    for device in gpu auto; do
-        OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "$mpiexec" --oversubscribe -np 3 \
-            "$tetiso" run --lattice 60 --domains 8 --quiet --device $device -o "$work/ranks.ply" \
-            --report "$work/ranks.json" 2>"$work/err" || fail "run under mpirun --device $device: $(cat "$work/err")"
-        cmp -s "$work/alone.ply" "$work/ranks.ply" ||
-            fail "run under mpirun --device $device differs from one CPU process"
+    for ranks in 2 3 5; do
+        for device in gpu auto; do
+            OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "$mpiexec" --oversubscribe -np $ranks \
+                "$tetiso" run --lattice 60 --domains 8 --quiet --device $device -o "$work/ranks.ply" \
+                --report "$work/ranks.json" 2>"$work/err" || {
+                fail "run under mpirun -np $ranks --device $device: $(cat "$work/err")"
+                continue
+            }
+            cmp -s "$work/alone.ply" "$work/ranks.ply" ||
+                fail "run under mpirun -np $ranks --device $device differs from one CPU process"
+            one_driver "$work/ranks.json" $device $ranks
+        done
     done
 fi
 # The resource manager's choice, task by task: the surface whatever it is,

@@ -215,30 +215,28 @@ TEST(ResourceManager, RefusesATaskNoDeviceCanHold) {
 }
 
 // A node's devices and a job's requests (placement.hpp): the CPU holds the
-// node's workers; a GPU the memory left after each process's context, and
-// none where that leaves too little; a domain task may go anywhere, a seam
-// only to the CPU.
+// node's CPU workers; each GPU one task at a time, and only a domain its
+// memory holds after the context; a domain task may go anywhere (under
+// --device gpu only to a GPU), a seam only to the CPU.
 TEST(NodePlacement, DevicesAndRequestsOfAJob) {
     JobConfig config;
     config.lattice = 21;
     config.domains = 8;
     const Job job(config);
-    const NodePlacement cpu_only(job, 3, 0, 0.0);
+    const NodePlacement cpu_only(job, 3, {}, 0.0);
     ASSERT_EQ(cpu_only.manager.devices().size(), 1u);
     EXPECT_DOUBLE_EQ(cpu_only.manager.devices()[0].capacity, 3.0);
 
-    const NodePlacement two_gpus(job, 3, 2, 16000.0);
+    const NodePlacement two_gpus(job, 3, {0, 1}, 16000.0);
     ASSERT_EQ(two_gpus.manager.devices().size(), 3u);
     EXPECT_EQ(two_gpus.gpu_of(0), -1);
     EXPECT_EQ(two_gpus.gpu_of(2), 1);
-    EXPECT_DOUBLE_EQ(two_gpus.manager.devices()[1].capacity, 16000.0 * 0.95 - 3 * kGpuContextMiB);
+    EXPECT_DOUBLE_EQ(two_gpus.manager.devices()[1].capacity, 1.0);
 
     const int domain_task = job.task_count() - 1; // leaves come last (task_tree)
     ASSERT_EQ(job.kind(domain_task), TaskKind::domain);
     const ResourceRequest domain = two_gpus.request(domain_task, nullptr, nullptr);
-    EXPECT_EQ(domain.units[0], 1.0);
-    EXPECT_GT(domain.units[1], kGpuTaskMarginMiB);
-    EXPECT_EQ(domain.units[1], domain.units[2]);
+    EXPECT_EQ(domain.units, (std::vector<double>{1, 1, 1}));
     EXPECT_DOUBLE_EQ(domain.size, static_cast<double>(job.partition().tet_count()) / 8);
 
     ASSERT_EQ(job.kind(0), TaskKind::seam);
@@ -249,5 +247,13 @@ TEST(NodePlacement, DevicesAndRequestsOfAJob) {
     EXPECT_EQ(seam.units, (std::vector<double>{1, 0, 0}));
     EXPECT_DOUBLE_EQ(seam.size, 3.0);
 
-    EXPECT_EQ(NodePlacement(job, 8, 1, 4000.0).manager.devices().size(), 1u); // 8 contexts leave no room
+    // A GPU whose memory, less the context, cannot hold the domain's
+    // estimate: the domain stays on the CPU, or under --device gpu is refused.
+    const double small = (kGpuContextMiB + kGpuTaskMarginMiB) / 0.95;
+    EXPECT_EQ(NodePlacement(job, 3, {0}, small).request(domain_task, nullptr, nullptr).units,
+              (std::vector<double>{1, 0}));
+    const NodePlacement gpu_only(job, 3, {0}, 16000.0, false);
+    EXPECT_EQ(gpu_only.request(domain_task, nullptr, nullptr).units, (std::vector<double>{0, 1}));
+    EXPECT_EQ(gpu_only.request(0, &left, &right).units, (std::vector<double>{1, 0}));
+    EXPECT_THROW(NodePlacement(job, 3, {0}, small, false).request(domain_task, nullptr, nullptr), Error);
 }

@@ -1,24 +1,34 @@
-// Placing a job's tasks on one node's devices (--device auto): the node's
-// ResourceManager, built from its worker processes and GPUs, and the
-// requests a task makes of it.
+// Placing a job's tasks on one node's devices (--device auto, and --device
+// gpu under MPI): the node's ResourceManager, built from its CPU worker
+// processes and its GPUs, and the requests a task makes of it.
+//
+// Units. The CPU counts worker processes, one per task. A GPU counts task
+// slots, one: each GPU is driven by one process of its node, which keeps the
+// device's context, compiled kernels and buffers from one task to the next,
+// and runs its tasks one after another. Processes that each open a context on
+// one GPU pay its set-up each, and their kernels are time-sliced, not run
+// side by side; one task at a time in one context is the fastest way to share
+// a GPU and the safe one: its memory holds one task's buffers. The memory a
+// task needs is therefore not a counter but a condition: a domain whose
+// estimate does not fit the GPU may only run on the CPU.
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "tetiso/resources.hpp"
 #include "tetiso/schedule.hpp"
 
 namespace tetiso {
 
-// Device memory a domain task is admitted with on a GPU: its tetrahedra,
-// nodes, field values and the buffers of extraction and reduction, per
-// tetrahedron of the domain, plus a margin for the kernels' scratch. An
-// estimate from the sizes of the arrays, not a measurement; it errs large,
-// so that processes sharing a GPU do not together exhaust it.
+// Device memory a domain task needs on a GPU: its tetrahedra, nodes, field
+// values and the buffers of extraction and reduction, per tetrahedron of the
+// domain, plus a margin for the kernels' scratch. An estimate from the sizes
+// of the arrays, not a measurement; it errs large.
 inline constexpr double kGpuBytesPerTet = 256;
 inline constexpr double kGpuTaskMarginMiB = 64;
-// Device memory each process that may use a GPU keeps for its CUDA context,
-// not available to tasks.
+// Device memory the driving process's CUDA context keeps, not available to
+// tasks.
 inline constexpr double kGpuContextMiB = 512;
 
 // The memory of CUDA device `gpu` in MiB, from gpu_info(); 0 where unknown.
@@ -26,12 +36,17 @@ double gpu_memory_mib(int gpu);
 
 class NodePlacement {
 public:
-    // `processes`: the node's worker processes, its CPU capacity; `gpus`
-    // GPUs of `gpu_mib` each (the smallest of the node's).
-    NodePlacement(const Job& job, int processes, int gpus, double gpu_mib);
+    // `cpu_processes`: the node's processes that run tasks on the CPU, its
+    // CPU capacity (at least 1); `gpus`: the CUDA indices of the GPUs the
+    // node's tasks may use, of `gpu_mib` each (the smallest of the node's);
+    // `domains_on_cpu`: false under --device gpu, where domain tasks run on
+    // a GPU only (seams always run on the CPU).
+    NodePlacement(const Job& job, int cpu_processes, const std::vector<int>& gpus, double gpu_mib,
+                  bool domains_on_cpu = true);
 
-    // The request a task makes: a domain task one process on the CPU or its
-    // memory on any GPU; a seam one process on the CPU (seams run there).
+    // The request a task makes: a domain task one CPU process or one slot on
+    // any GPU whose memory holds it; a seam one CPU process. Throws
+    // tetiso::Error when a domain may run on a GPU only and fits none.
     ResourceRequest request(int task, const Piece* left, const Piece* right) const;
 
     // The CUDA index of a manager's device, -1 for the CPU.
@@ -42,6 +57,9 @@ public:
 private:
     const Job& job_;
     double domain_tets_;
+    double task_mib_;   // a domain task's estimated device memory
+    double usable_mib_; // a GPU's memory less its context and a margin
+    bool domains_on_cpu_;
 };
 
 } // namespace tetiso

@@ -185,6 +185,14 @@ public:
     virtual Piece execute(int task, const Piece* left, const Piece* right, TaskRecord& record,
                           const TaskThreads& threads) const;
 
+    // Makes this process's Gpu for CUDA device `gpu` and runs a small domain
+    // on it, so that the context, the kernels' loading and the first
+    // allocations are paid before the job's first task there (a GPU's
+    // driving process does this at start-up: the first task would otherwise
+    // take seconds and teach the resource manager that the GPU is slow).
+    // Throws tetiso::Error where the device cannot be used.
+    void prepare_gpu(int gpu) const;
+
 private:
     ReduceOptions reduce_options(const TaskThreads& threads) const {
         ReduceOptions options = reduce_options_;
@@ -195,11 +203,13 @@ private:
 
     // A domain task on GPU `gpu` of this process's node.
     Piece execute_on_gpu(int domain, int gpu, TaskRecord& record, const ReduceOptions& options) const;
+    Gpu& gpu(int index) const;
 
     JobConfig config_;
     std::unique_ptr<Partition> partition_;
-    // Made at the first domain task that runs on each GPU (rank 0 of an MPI
-    // job runs only seams, and needs none); kept for the next.
+    // Made by prepare_gpu or at the first domain task that runs on each GPU
+    // (rank 0 of an MPI job runs only seams, and needs none); kept for the
+    // next.
     mutable std::map<int, std::unique_ptr<Gpu>> gpus_;
     std::vector<TaskNode> tree_;
     float level_ = 0;
