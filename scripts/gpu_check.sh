@@ -20,6 +20,10 @@
 #                                     there: the tests, then what
 #                                     results/reduce-gpu/ is made from (see
 #                                     bench() below), under OUT
+#   scripts/gpu_check.sh jobs OUT COMMIT DEADLINE_S N:D...
+#                                     there: the jobs of
+#                                     results/hardware-comparison.md (see
+#                                     jobs() below), under OUT
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 carry=$root/.carry/gpu
@@ -115,12 +119,75 @@ bench() {
     grep -E "median|byte for byte|DIFFERS" "$out/bench.log"
 }
 
+# What results/hardware-comparison.md is made from, there: for each case
+# N:D, the job `tetiso run --lattice N --domains D` on every core of the
+# machine (one rank per core, rank 0 the controller), once with --device cpu
+# and once with --device auto, each with its report and wall time, the two
+# surfaces compared with cmp. Cases run in the order given, and one that
+# could not end before DEADLINE_S seconds from the start (judged by the
+# job before it, scaled by the number of nodes, N^3) is skipped, so the lent
+# machine's time limit is never hit mid-job. Then, here,
+# scripts/report_hardware.py OUT... writes the report.
+jobs() {
+    local out=$1 commit=$2 deadline=$3
+    shift 3
+    mkdir -p "$out"
+    if [ ! -d "$carry/bin" ]; then
+        mkdir -p "$carry"
+        tar -C "$carry" -xJf "$root/.carry/gpu.tar.xz"
+    fi
+    export LD_LIBRARY_PATH=$carry/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
+    export OMP_WAIT_POLICY=passive OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+    local ranks
+    ranks=$(nproc)
+    local started=$SECONDS last=0 last_n=1 failed=0
+    local -a launch=(mpirun --bind-to core -np "$ranks")
+    python3 "$root/scripts/bench_report_common.py" meta "$out/meta.json" \
+        "script_cmd=scripts/gpu_check.sh jobs OUT $commit $deadline $*" "commit=$commit" \
+        "source_state=Release build for sm_90 of commit $commit, made by scripts/gpu_check.sh prepare" \
+        "gpu=$(nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader | paste -sd';')" \
+        "launcher=${launch[*]}" "environment=OMP_WAIT_POLICY=passive" "load_before=$(cut -d' ' -f1-3 /proc/loadavg)"
+    for case in "$@"; do
+        local n=${case%%:*} d=${case##*:}
+        for device in cpu auto; do
+            local name=n$n-d$d-$device
+            if [ $((SECONDS - started + last * n * n * n / (last_n * last_n * last_n))) -gt "$deadline" ]; then
+                echo "$name: skipped (would pass the deadline)"
+                continue
+            fi
+            local t0=$SECONDS
+            timeout $((deadline - (SECONDS - started))) "${launch[@]}" "$carry/bin/tetiso" run --lattice "$n" \
+                --domains "$d" --device "$device" --quiet -o "/tmp/$name.vtp" --report "$out/$name.json" \
+                >"$out/$name.log" 2>&1 || {
+                echo "$name: FAILED"
+                tail -5 "$out/$name.log"
+                failed=1
+                continue
+            }
+            last=$((SECONDS - t0)) last_n=$n
+            echo "$name: ${last} s wall"
+        done
+        if [ -e "/tmp/n$n-d$d-cpu.vtp" ] && [ -e "/tmp/n$n-d$d-auto.vtp" ]; then
+            if cmp -s "/tmp/n$n-d$d-cpu.vtp" "/tmp/n$n-d$d-auto.vtp"; then
+                echo "identical" >"$out/n$n-d$d-cmp.txt"
+            else
+                echo "DIFFER" >"$out/n$n-d$d-cmp.txt"
+                failed=1
+            fi
+            echo "n$n-d$d: cpu and auto surfaces $(cat "$out/n$n-d$d-cmp.txt")"
+            rm -f "/tmp/n$n-d$d-cpu.vtp" "/tmp/n$n-d$d-auto.vtp"
+        fi
+    done
+    return $failed
+}
+
 case ${1:-} in
 prepare) prepare ;;
+jobs) jobs "${2:?usage: gpu_check.sh jobs OUT COMMIT DEADLINE_S N:D...}" "${3:?}" "${4:?}" "${@:5}" ;;
 run) run "${2:?usage: gpu_check.sh run OUT [quick]}" "${3:-}" ;;
 bench) bench "${2:?usage: gpu_check.sh bench OUT [COMMIT]}" "${3:-}" ;;
 *)
-    echo "usage: scripts/gpu_check.sh prepare | run OUT [quick] | bench OUT [COMMIT]" >&2
+    echo "usage: scripts/gpu_check.sh prepare | run OUT [quick] | bench OUT [COMMIT] | jobs OUT COMMIT DEADLINE_S N:D..." >&2
     exit 2
     ;;
 esac
