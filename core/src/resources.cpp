@@ -73,6 +73,20 @@ double ResourceManager::predict(int kind, double size, int device) const {
     return (fastest ? *fastest / kUncalibratedSpeedup : kUncalibratedSeconds) + transfer;
 }
 
+double ResourceManager::expected_seconds(const ResourceRequest& request, int device, double now) const {
+    const double seconds = predict(request.kind, request.size, device);
+    if (const PerformanceModel* m = model(request.kind, device); m && m->predict(request.size)) return seconds;
+    // Uncalibrated here, but a task of the same kind that has run here for
+    // s seconds and not ended says such tasks take at least s: without this
+    // floor a device whose first tasks are still running looks faster than
+    // one that has finished some (its guess is derived from theirs), and
+    // is handed every task in the meantime.
+    double running = 0;
+    for (const auto& [ticket, b] : bookings_)
+        if (b.device == device && b.started && b.request.kind == request.kind) running = std::max(running, now - b.start);
+    return std::max(seconds, running);
+}
+
 double ResourceManager::units_booked_at(int device, double time, double now) const {
     double units = 0;
     for (const auto& [ticket, b] : bookings_) {
@@ -116,7 +130,7 @@ Grant ResourceManager::request(const ResourceRequest& request, double now) {
         const double units = d < request.units.size() ? request.units[d] : 0;
         if (!(units > 0) || units > devices_[d].capacity) continue;
         const int device = static_cast<int>(d);
-        const double seconds = predict(request.kind, request.size, device);
+        const double seconds = expected_seconds(request, device, now);
         const double start = admission_time(device, units, seconds, now);
         // Ties go to the lower device index: the CPU first, where it is listed first.
         if (start + seconds < best_end) {

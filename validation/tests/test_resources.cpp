@@ -130,6 +130,36 @@ TEST(ResourceManager, LearnsFromFinishedTasks) {
     EXPECT_EQ(manager.model(kDomain, kGpu)->samples(), PerformanceModel::kMinSamples);
 }
 
+// The first tasks on the CPU still running while the GPU has finished three:
+// the CPU, uncalibrated, must not be guessed faster than the GPU (its guess
+// derives from the GPU's times) when its tasks have already run longer.
+TEST(ResourceManager, RunningTasksBoundAnUncalibratedGuess) {
+    ResourceManager manager({cpu(4), gpu(0, 1)});
+    std::vector<int> running;
+    for (int i = 0; i < 4; ++i) {
+        const Grant g = manager.request({kDomain, 10, {1, 0}}, 0);
+        ASSERT_TRUE(manager.start(g.ticket, 0));
+        running.push_back(g.ticket);
+    }
+    for (int i = 0; i < PerformanceModel::kMinSamples; ++i) {
+        const Grant g = manager.request({kDomain, 10, {0, 1}}, 0.1 * i);
+        ASSERT_TRUE(manager.start(g.ticket, 0.1 * i));
+        manager.finish(g.ticket, 0.1);
+    }
+    // The guess alone would be 0.05 s: the CPU's four tasks have run 0.9 s.
+    EXPECT_DOUBLE_EQ(manager.predict(kDomain, 10, kCpu), 0.1 / ResourceManager::kUncalibratedSpeedup);
+    const Grant next = manager.request({kDomain, 10, {1, 1}}, 0.9);
+    EXPECT_EQ(next.device, kGpu);
+    EXPECT_NEAR(next.predicted_seconds, 0.1, 1e-12);
+    // Once calibrated, the CPU's model alone counts, however long a task
+    // there has been running.
+    manager.cancel(next.ticket);
+    for (const int ticket : running) manager.finish(ticket, 2.0);
+    const Grant slow = manager.request({kDomain, 10, {1, 0}}, 5);
+    ASSERT_TRUE(manager.start(slow.ticket, 5));
+    EXPECT_DOUBLE_EQ(manager.request({kDomain, 10, {1, 0}}, 100).predicted_seconds, 2.0);
+}
+
 TEST(ResourceManager, UsesSeveralGpus) {
     ResourceManager manager({cpu(8), gpu(0, 100), gpu(1, 100)});
     calibrate(manager, kCpu, 10, 1.0);

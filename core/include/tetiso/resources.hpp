@@ -3,13 +3,13 @@
 // its GPUs, and a choice of device per task that minimises the time at which
 // the task would end there.
 //
-// A request names the units it needs on each device it may run on (the CPU:
-// one process; a GPU: the MiB of device memory the task is estimated to
-// need, so that processes sharing a GPU never together ask it for more than
-// it has). The manager predicts the task's seconds τ_i on each device from
-// the tasks that finished there (PerformanceModel), finds the time t_b,i at
-// which counter i admits the request, and grants the device with the
-// smallest t_b,i + τ_i. Grants are decided in the order requests arrive, and
+// A request names the units it needs on each device it may run on, in
+// whatever units the caller counts (placement.hpp: CPU worker processes, and
+// one task slot per GPU). The manager predicts the task's seconds τ_i on each
+// device from the tasks that finished there (PerformanceModel; while a
+// device has too few, no less than its tasks of that kind have been running),
+// finds the time t_b,i at which counter i admits the request, and grants the
+// device with the smallest t_b,i + τ_i. Grants are decided in the order requests arrive, and
 // none is placed on a device before one granted earlier there: a waiting
 // client is served in order and a large request is not starved by small
 // ones. The manager never lets a device's units in use exceed its capacity:
@@ -132,6 +132,10 @@ private:
         bool started = false;
         ResourceRequest request;
     };
+    // The seconds request() expects the task to take on `device` at `now`:
+    // the model's prediction, and where the model has too few samples, at
+    // least as long as any task of its kind has been running there.
+    double expected_seconds(const ResourceRequest& request, int device, double now) const;
     // When device `d` could admit `units` for `seconds`, at `now` or later.
     double admission_time(int device, double units, double seconds, double now) const;
     double units_booked_at(int device, double time, double now) const;
