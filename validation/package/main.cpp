@@ -1,7 +1,8 @@
 // tetiso as a library: the isosurface of each domain of a decomposed mesh is
 // extracted and reduced on its own, then the pieces are merged by the edge
 // keys of their vertices into one surface. Exits non-zero unless that
-// surface is what the field's level set is: a closed, oriented torus.
+// surface is what the field's level set is, a closed, oriented torus, and
+// smaller than the extracted one.
 #include <cstddef>
 #include <cstdio>
 #include <map>
@@ -41,8 +42,8 @@ int main() {
     const auto level = static_cast<float>(problem.field().default_level());
 
     tetiso::ReduceOptions options;
-    // The reduced surface stays within a quarter of the lattice spacing of
-    // every vertex of the extracted one.
+    // Every vertex of the extracted surface stays within a quarter of the
+    // lattice spacing of the reduced one.
     options.max_error = 0.25 * problem.spacing();
 
     std::vector<tetiso::Piece> pieces;
