@@ -16,7 +16,7 @@ comparing the medians:
             its working set (about 120 MB) fits the shared L3 cache alone,
             not as P copies; per-step medians come from the reports.
 
-    scripts/probe_contention.py --tetiso build/core/tetiso --cores 1-15 --out results/speedup/contention
+    scripts/probe_contention.py --tetiso build/core/tetiso --cores 1-15 --out out/contention
     scripts/probe_contention.py --probes domain --cores 1-15 --out /tmp/domain-only
 
 Writes OUT.json (every run's seconds, the domain reports' steps, the ratios)

@@ -12,7 +12,8 @@ scripts/render_surface.py draws.
 Each INPUT is an OUTDIR of scripts/paper_reproduction.sh or one of the files
 in it: sweep outputs of scripts/sweep_speedup.py (any name, merged),
 stream.json (bench_stream), check-dD.json (`tetiso check` of D domains'
-surface), contention.json (scripts/probe_contention.py) and machine.txt.
+surface), contention.json (scripts/probe_contention.py) and machine.txt (or
+any *machine*.txt).
 They are copied into OUT as sweep.json (merged), stream.json, check-dD.json,
 contention.json and machine.txt, and the page is written from OUT alone;
 with no INPUT it is rewritten from what OUT holds. Every number on the page
@@ -66,7 +67,7 @@ def gather(inputs, out):
         files += sorted(item.iterdir()) if item.is_dir() else [item]
     sweeps = []
     for path in files:
-        if path.name == "machine.txt":
+        if path.suffix == ".txt" and "machine" in path.name:
             shutil.copyfile(path, out / "machine.txt")
         elif path.suffix != ".json" or path.resolve().parent == out.resolve() and path.name == "sweep.json":
             continue

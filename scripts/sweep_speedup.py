@@ -6,7 +6,7 @@ Fig. 11. Writes NAME.csv (one row per series and worker count), NAME.png
 (command, machine, commit, and every run's report with each rank's peak
 memory).
 
-    scripts/sweep_speedup.py --lattice 100 --workers 1,2 --out results/speedup/local
+    scripts/sweep_speedup.py --lattice 100 --workers 1,2 --out out/local
 
 P workers run as `mpirun -np P+1` (rank 0 controls and holds the pieces, the
 P others run tasks). Each point is the median of --repeat runs of the job's
@@ -26,7 +26,7 @@ first of a sweep, always starts), a failed run drops the rest of its series
 --merge combines the runs of earlier NAME.json files into one table and plot:
 
     scripts/sweep_speedup.py --lattice 500 --points 125:1,125:15 --deadline 500 --out part1
-    scripts/sweep_speedup.py --merge part1.json part2.json --out results/speedup/device
+    scripts/sweep_speedup.py --merge part1.json part2.json --out out/device
 """
 import argparse
 import csv
