@@ -7,9 +7,9 @@ edges (the paper's Fig. 10), and one view of the whole reduced surface.
         --box 1.8,1.8,1.8,2.3,2.3,2.3 --job-reduced "CMD" --job-raw "CMD" --out results/paper-reproduction
 
 REDUCED and RAW are binary PLY files written by `tetiso run` (RAW with
---no-reduce) for the same problem. The fragment holds the triangles whose
-centroid lies in the box (whole triangles, not cut ones: what is drawn is
-what the job wrote). Writes OUT/fragment.png, OUT/surface.png and
+--no-reduce) for the same problem. Both fragments are drawn cut at the box's
+faces; the triangle counts are of the whole triangles whose centroid lies in
+the box. Writes OUT/fragment.png, OUT/surface.png and
 OUT/render.json (the box, triangle counts, the jobs' commands, machine,
 commit, date, VTK version), which scripts/report_paper.py cites.
 
@@ -50,7 +50,7 @@ def read_ply(path):
             elif words[0] == "property":
                 if words[1] == "list":
                     # Three corners each: the list is a count and three indices.
-                    elements[-1][2] += [("n", PLY_TYPES[words[2]]), (words[4], PLY_TYPES[words[3]], (3,))]
+                    elements[-1][2].extend([("n", PLY_TYPES[words[2]]), (words[4], PLY_TYPES[words[3]], (3,))])
                 else:
                     elements[-1][2].append((words[2], PLY_TYPES[words[1]]))
         data = {}
@@ -69,6 +69,13 @@ def in_box(vertices, triangles, box):
     return triangles[np.all((centroids >= low) & (centroids <= high), axis=1)]
 
 
+def touching(vertices, triangles, box):
+    """Triangles whose bounding box meets the box: all the clip can keep a part of."""
+    corners = vertices[triangles]
+    low, high = np.array(box[:3]), np.array(box[3:])
+    return triangles[np.all((corners.min(axis=1) <= high) & (corners.max(axis=1) >= low), axis=1)]
+
+
 def polydata(vertices, triangles):
     points = vtk.vtkPoints()
     points.SetData(numpy_support.numpy_to_vtk(vertices, deep=True))
@@ -79,6 +86,19 @@ def polydata(vertices, triangles):
     out.SetPoints(points)
     out.SetPolys(polys)
     return out
+
+
+def clipped(mesh, box):
+    """The mesh cut at the box's faces, so that both fragments end at the same
+    border whatever the size of their triangles."""
+    region = vtk.vtkBox()
+    region.SetBounds(box[0], box[3], box[1], box[4], box[2], box[5])
+    clip = vtk.vtkClipPolyData()
+    clip.SetInputData(mesh)
+    clip.SetClipFunction(region)
+    clip.InsideOutOn()
+    clip.Update()
+    return clip.GetOutput()
 
 
 def actor(mesh, color, edges):
@@ -95,8 +115,8 @@ def actor(mesh, color, edges):
     prop.BackfaceCullingOff()
     if edges:
         prop.EdgeVisibilityOn()
-        prop.SetEdgeColor(0.1, 0.1, 0.15)
-        prop.SetLineWidth(1.0)
+        prop.SetEdgeColor(0.15, 0.2, 0.3)
+        prop.SetLineWidth(0.6)
     return out
 
 
@@ -155,28 +175,14 @@ def render_whole(mesh, path, size):
     win = window(size, size)
     r = vtk.vtkRenderer()
     r.SetBackground(1, 1, 1)
-    elevation = vtk.vtkElevationFilter()
-    elevation.SetInputData(mesh)
-    elevation.SetLowPoint(0, 0, 0)
-    elevation.SetHighPoint(0, 0, 5)
-    normals = vtk.vtkPolyDataNormals()
-    normals.SetInputConnection(elevation.GetOutputPort())
-    mapper = vtk.vtkPolyDataMapper()
-    mapper.SetInputConnection(normals.GetOutputPort())
-    lut = vtk.vtkLookupTable()
-    lut.SetHueRange(0.62, 0.05)
-    lut.SetSaturationRange(0.55, 0.55)
-    lut.Build()
-    mapper.SetLookupTable(lut)
-    a = vtk.vtkActor()
-    a.SetMapper(mapper)
-    a.GetProperty().SetSpecular(0.2)
+    a = actor(mesh, (0.86, 0.72, 0.5), edges=False)
+    a.GetProperty().SetInterpolationToGouraud()
+    a.GetProperty().SetSpecular(0.15)
     r.AddActor(a)
     r.ResetCamera()
     r.GetActiveCamera().Azimuth(30)
     r.GetActiveCamera().Elevation(25)
     r.ResetCamera()
-    r.GetActiveCamera().Zoom(1.2)
     win.AddRenderer(r)
     save(win, path)
 
@@ -204,10 +210,12 @@ def main():
     vr, tr = read_ply(args.reduced)
     vw, tw = read_ply(args.raw)
     fr, fw = in_box(vr, tr, box), in_box(vw, tw, box)
-    render_fragment([(polydata(vr, fr), f"reduced: {len(fr):,} triangles")],
-                    [(polydata(vw, fw), f"unreduced: {len(fw):,} triangles")],
+    render_fragment([(clipped(polydata(vr, touching(vr, tr, box)), box),
+                      f"reduced: {len(fr):,} triangles")],
+                    [(clipped(polydata(vw, touching(vw, tw, box)), box),
+                      f"unreduced: {len(fw):,} triangles")],
                     os.path.join(args.out, "fragment.png"), args.size)
-    render_whole(polydata(vr, tr), os.path.join(args.out, "surface.png"), args.size + 200)
+    render_whole(polydata(vr, tr), os.path.join(args.out, "surface.png"), args.size * 9 // 10)
     lscpu = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
     model = next((l.split(":", 1)[1].strip() for l in lscpu.splitlines() if l.startswith("Model name")), "?")
     meta = {"command": "scripts/render_surface.py " + " ".join(

@@ -377,7 +377,7 @@ def section_limits(rows, stream, contention, meta, have_plot):
     return lines
 
 
-def section_pictures(out):
+def section_pictures(out, rows):
     render = load(out, "render.json")
     if not render:
         return ["## Pictures", "", "Not rendered yet: scripts/render_surface.py draws them.", ""]
@@ -393,6 +393,14 @@ def section_pictures(out):
              f"{render['machine']}; commit {render['commit']}; {render['date']}; VTK {render['vtk']} offscreen. "
              "The surfaces are byte-identical on any machine, so they are drawn where the speed-up was not "
              "measured.", ""]
+    same = [r for r in rows if r["domains"] == render["domains"]]
+    if same:
+        counts = {x["triangles"] for r in same for x in r["reports"]}
+        agree = counts == {render["triangles"]["reduced"]}
+        lines += [f"The speed-up runs with {render['domains']} domains gave "
+                  f"{', '.join(f'{c:,}' for c in sorted(counts))} triangles: "
+                  + ("the same surface size." if agree else "**not the drawn surface's size** (different commits)."),
+                  ""]
     return lines
 
 
@@ -461,7 +469,7 @@ def main():
     lines += section_stages(rows)
     lines += section_triangles(rows, checks)
     lines += section_limits(plotted, stream, contention, meta, have_plot and bool(stream))
-    lines += section_pictures(out)
+    lines += section_pictures(out, rows)
     lines += section_provenance(meta, out)
     (out / "README.md").write_text("\n".join(lines))
     print(f"wrote {out / 'README.md'}")
