@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Why a job's tasks run slower when every core is busy.
 
-At 15 workers on the 16-core device machine the tasks of `tetiso run` take
+When P workers keep every core busy, the tasks of `tetiso run` can take
 longer in sum than the same tasks run by one worker, and that alone caps the
-speed-up below 15. This probe separates the candidate causes by running one
+speed-up below P. This probe separates the candidate causes by running one
 single-thread command alone on one core, then as P pinned copies at once, and
 comparing the medians:
 

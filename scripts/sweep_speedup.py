@@ -17,7 +17,7 @@ seconds.total (MPI start-up and writing the surface included) and the wall
 time of the whole mpirun, and the largest peak resident memory of any worker
 and of rank 0 (each rank runs under scripts/rank_peak_rss.py).
 
-A long sweep can be split over several sessions (a lent machine runs one
+A long sweep can be split over several calls (a lent machine runs one
 command for at most minutes): --points runs chosen (domains:workers) pairs,
 --deadline stops starting runs that would not finish in time, the outputs are
 rewritten after every run (a run with nothing to estimate it from, the
