@@ -329,9 +329,10 @@ def section_limits(rows, stream, contention, meta, have_plot):
             misses = report["perf"]["LLC-load-misses"] + report["perf"]["LLC-store-misses"]
             traffic = ("perf", misses * 64 / report["wall_seconds"] / 1e9)
         elif peaks:
-            # Every domain task writes at least its own resident set once.
+            # A domain task builds its domain, piece and reduction state
+            # afresh: about a worker's resident set, touched at least once.
             touched = domains * statistics.median(peaks[1:]) * 1024
-            traffic = ("lower bound", touched / report["seconds"]["job"] / 1e9)
+            traffic = ("estimate", touched / report["seconds"]["job"] / 1e9, statistics.median(peaks[1:]) / 1024)
         text = [f"At P = {p} ({domains} domains) each task runs {inflation:.2f}× as long as alone and the workers "
                 f"are busy {utilisation:.0%} of the job: efficiency {r['efficiency']:.2f} ≈ "
                 f"{utilisation:.2f} / {inflation:.2f}."]
@@ -343,11 +344,11 @@ def section_limits(rows, stream, contention, meta, have_plot):
                         f"{near} cores streaming at once (each gets {share:.2f} of the bandwidth one core gets "
                         "alone).")
             if traffic:
-                kind, gbs = traffic
+                kind, gbs = traffic[:2]
                 source = ("perf's last-level-cache load and store misses × 64 B over the run's wall time"
                           if kind == "perf" else
-                          f"a lower bound: {domains} domain tasks each writing at least a worker's median peak "
-                          "resident set, over the job's seconds; perf could not count cache misses here")
+                          f"an estimate without cache-miss counts: {domains} domain tasks each touching a "
+                          f"worker's median peak resident set, {traffic[2]:.0f} MiB, once, over the job's seconds")
                 text.append(f"The job moves about {gbs:.1f} GB/s ({source}) against {res[near]['triad_gb_s']:.0f} "
                             f"GB/s that STREAM's triad sustains with {near} threads ({gbs / res[near]['triad_gb_s']:.0%}).")
             bound = inflation >= 0.75 / share and (traffic is None or traffic[1] >= 0.5 * res[near]["triad_gb_s"])
