@@ -32,7 +32,7 @@ from pathlib import Path
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_report_common import table  # noqa: E402
-from sweep_speedup import merged, write  # noqa: E402
+from sweep_speedup import merged, points, write  # noqa: E402
 
 DOMAIN_STAGES = ("generate", "extract", "reduce")
 SEAM_STAGES = ("merge", "region", "splice", "reduce")
@@ -116,13 +116,6 @@ def cpu_only(meta, runs):
     return asked or all("device" not in r["report"] for r in runs)
 
 
-def groups(runs):
-    by_point = {}
-    for run in runs:
-        by_point.setdefault((run["domains"], run["workers"]), []).append(run["report"])
-    return by_point
-
-
 def median_report(reports):
     """The report whose job time is the median (the lower one of an even count)."""
     ordered = sorted(reports, key=lambda r: r["seconds"]["job"])
@@ -192,17 +185,11 @@ def plot_bandwidth(rows, stream, meta, path):
     plt.close(fig)
 
 
-def speedup_rows(by_point):
-    base = {d: statistics.median(r["seconds"]["job"] for r in reports)
-            for (d, p), reports in by_point.items() if p == 1}
-    rows = []
-    for (domains, p), reports in sorted(by_point.items(), key=lambda item: (-item[0][0], item[0][1])):
-        seconds = statistics.median(r["seconds"]["job"] for r in reports)
-        t1 = base.get(domains)
-        rows.append({"domains": domains, "workers": p, "runs": len(reports), "seconds": seconds,
-                     "speedup": t1 / seconds if t1 else None, "efficiency": t1 / seconds / p if t1 else None,
-                     "report": median_report(reports), "reports": reports})
-    return rows
+def speedup_rows(runs):
+    return [{"domains": domains, "workers": p, "runs": len(reports), "seconds": seconds,
+             "speedup": t1 / seconds if t1 else None, "efficiency": t1 / seconds / p if t1 else None,
+             "report": median_report(reports), "reports": reports}
+            for domains, p, reports, seconds, t1 in points(runs)]
 
 
 def section_speedup(rows, meta, out, have_plot):
@@ -443,7 +430,7 @@ def main():
     meta = {k: v for k, v in data.items() if k != "runs"}
     stream, contention = load(out, "stream.json"), load(out, "contention.json")
     checks = {int(p.stem[len("check-d"):]): json.loads(p.read_text()) for p in out.glob("check-d*.json")}
-    rows = speedup_rows(groups(data["runs"]))
+    rows = speedup_rows(data["runs"])
     plotted = [r for r in rows if r["speedup"] is not None]
     have_plot = False
     try:

@@ -144,17 +144,22 @@ def max_or_blank(values, digits):
     return round(max(values), digits) if values else ""
 
 
-def table(runs):
-    """One row per (domains, workers), in series order (most domains first)."""
+def points(runs):
+    """(domains, workers, reports, median job seconds, the series' median at
+    one worker or None) per point, in series order (most domains first)."""
     groups = {}
     for run in runs:
         groups.setdefault((run["domains"], run["workers"]), []).append(run["report"])
     base = {d: statistics.median(r["seconds"]["job"] for r in reports)
             for (d, p), reports in groups.items() if p == 1}
+    return [(domains, p, reports, statistics.median(r["seconds"]["job"] for r in reports), base.get(domains))
+            for (domains, p), reports in sorted(groups.items(), key=lambda item: (-item[0][0], item[0][1]))]
+
+
+def table(runs):
+    """One row per (domains, workers), in series order (most domains first)."""
     rows = []
-    for (domains, p), reports in sorted(groups.items(), key=lambda item: (-item[0][0], item[0][1])):
-        seconds = statistics.median(r["seconds"]["job"] for r in reports)
-        t1 = base.get(domains)
+    for domains, p, reports, seconds, t1 in points(runs):
         rows.append({
             "domains": domains, "workers": p, "runs": len(reports), "seconds": round(seconds, 3),
             "speedup": round(t1 / seconds, 3) if t1 else "",
