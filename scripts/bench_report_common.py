@@ -104,6 +104,20 @@ def command_section(meta, context, regenerate):
     return lines
 
 
+def stamp(fig, text):
+    """Writes a figure's provenance (command, machine, commit, date) small
+    along its bottom edge, so that the picture says where it comes from even
+    away from its page; the plot area is shrunk to leave it room."""
+    fig.text(0.01, 0.005, text, fontsize=6, color="0.35")
+    fig.tight_layout(rect=(0, 0.03 + 0.02 * text.count("\n"), 1, 1))
+
+
+def bench_stamp(meta):
+    """stamp()'s text for a benchmark driver's meta.json."""
+    return (f"{meta['script_cmd']}; commit {meta['commit'][:12]}; {meta['date']}\n"
+            f"{meta['cpu_model']}, {meta['cpus']} CPUs, {meta['kernel']}")
+
+
 def load_meta(folder):
     """A results folder's meta.json: how its data files were made (command,
     machine, commit, date), for pages whose data files do not say it."""

@@ -10,13 +10,17 @@
 # OUTDIRs into results/paper-reproduction/.
 #
 #   scripts/paper_reproduction.sh OUTDIR BUDGET_S [POINTS]
-#   scripts/paper_reproduction.sh out/call1 550 250:1,250:15,125:15,63:15,250:8,250:4
+#   scripts/paper_reproduction.sh out/call1 550 250:1,250:2,250:15,125:15,63:15,250:8
+#   EXTRAS=check scripts/paper_reproduction.sh out/call2 550 125:1,125:4,250:4,125:8
+#   EXTRAS=check,probe scripts/paper_reproduction.sh out/call3 550 63:1,63:4,63:8
 #
 # POINTS is DOMAINS:WORKERS,... run in that order (default: every series at
 # 1, 2, 4, 8 and 15 workers, far more than one call's budget: give the part
 # that fits). Nothing is started that would end after BUDGET_S seconds from
-# the script's start, estimated from the runs before it, so a lent machine's
-# time limit is never hit mid-run; split a long sweep over several calls.
+# the script's start, estimated from the runs before it in the same call (of
+# the same series, else with as many workers; a point with neither always
+# starts, so order each call's points to give every point one), so a lent
+# machine's time limit is never hit mid-run; split a long sweep over calls.
 #
 # Environment:
 #   TETISO_BIN     an already-built tetiso (else the tetiso target alone is

@@ -31,7 +31,7 @@ from collections import Counter
 from pathlib import Path
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_report_common import table  # noqa: E402
+from bench_report_common import stamp, table  # noqa: E402
 from sweep_speedup import merged, points, write  # noqa: E402
 
 DOMAIN_STAGES = ("generate", "extract", "reduce")
@@ -153,8 +153,7 @@ def plot_speedup(rows, meta, path):
     ax.grid(alpha=0.3)
     ax.legend(loc="upper left")
     ax.set_title(f"Speed-up of the isosurface job, N = {meta['lattice']} (cf. the paper's Fig. 11)", fontsize=10)
-    fig.text(0.01, 0.005, provenance(meta), fontsize=6, color="0.35")
-    fig.tight_layout(rect=(0, 0.04, 1, 1))
+    stamp(fig, provenance(meta))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
@@ -179,8 +178,7 @@ def plot_bandwidth(rows, stream, meta, path):
     ax.grid(alpha=0.3)
     ax.legend(loc="lower left", fontsize=7)
     ax.set_title("Job efficiency against each core's share of memory bandwidth", fontsize=10)
-    fig.text(0.01, 0.005, provenance(meta) + "; STREAM: bench/bench_stream.cpp", fontsize=6, color="0.35")
-    fig.tight_layout(rect=(0, 0.05, 1, 1))
+    stamp(fig, provenance(meta) + "; STREAM: bench/bench_stream.cpp")
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
@@ -406,7 +404,11 @@ def section_provenance(meta, out):
     lines += ["To measure again (a device machine with 16 cores; split the points over calls that fit its "
               "time limit) and rewrite this page:", "", "```",
               "TETISO_BIN=build/core/tetiso scripts/paper_reproduction.sh out/call1 550 "
-              "250:1,250:15,125:15,63:15,250:8,250:4",
+              "250:1,250:2,250:15,125:15,63:15,250:8",
+              "TETISO_BIN=build/core/tetiso EXTRAS=check scripts/paper_reproduction.sh out/call2 550 "
+              "125:1,125:4,250:4,125:8",
+              "TETISO_BIN=build/core/tetiso EXTRAS=check,probe scripts/paper_reproduction.sh out/call3 550 "
+              "63:1,63:4,63:8",
               "scripts/report_paper.py out/call1 out/call2 out/call3", "```", ""]
     return lines
 
