@@ -16,8 +16,10 @@ surface), contention.json (scripts/probe_contention.py) and machine.txt (or
 any *machine*.txt).
 They are copied into OUT as sweep.json (merged), stream.json, check-dD.json,
 contention.json and machine.txt, and the page is written from OUT alone;
-with no INPUT it is rewritten from what OUT holds. Every number on the page
-comes from those files. Dependencies: python3, python3-matplotlib for the
+with no INPUT it is rewritten from what OUT holds. The pictures, render.json
+and render-check.json (scripts/render_surface.py and `tetiso check` of the
+drawn surface) stay in OUT across new inputs. Every number on the page comes
+from those files. Dependencies: python3, python3-matplotlib for the
 plots (without it the page is written without them).
 """
 import argparse
@@ -31,7 +33,7 @@ from collections import Counter
 from pathlib import Path
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_report_common import stamp, table  # noqa: E402
+from bench_report_common import stamp, table, topology_summary  # noqa: E402
 from sweep_speedup import merged, points, write  # noqa: E402
 
 DOMAIN_STAGES = ("generate", "extract", "reduce")
@@ -247,7 +249,8 @@ def section_triangles(rows, checks):
                      f"{raw / tri:.1f}×", f"{len(hashes)} of {len(reports)} runs" if hashes else "not recorded"])
     lines += [table(["domains", "raw triangles", "reduced triangles", "ratio", "distinct hashes"], body), ""]
     if checks:
-        lines += ["`tetiso check --no-self-intersections` of each series' final surface:", ""]
+        lines += ["`tetiso check` of each series' final surface (self-intersections are counted where tetiso "
+                  "was built with CGAL):", ""]
         body = []
         for domains, c in sorted(checks.items(), reverse=True):
             t = c["topology"]
@@ -257,16 +260,18 @@ def section_triangles(rows, checks):
             body.append([domains, f"{t['triangles']:,}", t["components"], sig,
                          "yes" if t["manifold"] else "**no**", f"{t['non_manifold_edges']} / {t['non_manifold_vertices']}",
                          "yes" if t["oriented"] else "**no**", t["degenerate_triangles"],
-                         f"{t['min_angle_deg']['below_1']:,}", f"{t['min_angle_deg']['min']:.3g}°"])
+                         f"{t['min_angle_deg']['below_1']:,}", f"{t['min_angle_deg']['min']:.3g}°",
+                         "not counted" if c.get("self_intersections") is None else c["self_intersections"]])
         lines += [table(["domains", "triangles", "components", "signature", "manifold",
                          "non-manifold edges / vertices", "consistently oriented", "degenerate",
-                         "angles < 1°", "smallest angle"], body), ""]
+                         "angles < 1°", "smallest angle", "self-intersections"], body), ""]
         series = {r["domains"] for r in rows}
         unchecked = sorted(series - set(checks), reverse=True)
         if unchecked:
             lines += [f"Not checked in these data: {', '.join(map(str, unchecked))} domains.", ""]
     else:
-        lines += ["No topology check in these data (scripts/paper_reproduction.sh writes one per series).", ""]
+        lines += ["No topology check of the speed-up runs' surfaces in these data (scripts/paper_reproduction.sh "
+                  "writes one per series); the drawn surface's is under Pictures.", ""]
     return lines
 
 
@@ -379,6 +384,11 @@ def section_pictures(out, rows):
              f"{render['machine']}; commit {render['commit']}; {render['date']}; VTK {render['vtk']} offscreen. "
              "The surfaces are byte-identical on any machine, so they are drawn where the speed-up was not "
              "measured.", ""]
+    check = load(out, "render-check.json")
+    if check:
+        crossings = check.get("self_intersections")
+        lines += [f"`tetiso check` of the drawn reduced surface: {topology_summary(check)}; self-intersections "
+                  + ("not counted" if crossings is None else f"{crossings}") + " (render-check.json).", ""]
     same = [r for r in rows if r["domains"] == render["domains"]]
     if same:
         counts = {x["triangles"] for r in same for x in r["reports"]}
