@@ -275,7 +275,7 @@ def section_triangles(rows, checks):
     return lines
 
 
-def section_limits(rows, stream, contention, meta, have_plot):
+def section_limits(rows, stream, contention, meta, have_plot, summary):
     lines = ["## What limits the speed-up", "",
              "The paper puts its lost speed-up down to memory bandwidth: the more processes run, the more "
              "they load the memory subsystem. Efficiency E = T(1)/(P·T(P)) splits into two factors: how much "
@@ -342,6 +342,9 @@ def section_limits(rows, stream, contention, meta, have_plot):
                 text.append(f"The job moves about {gbs:.1f} GB/s ({source}) against {res[near]['triad_gb_s']:.0f} "
                             f"GB/s that STREAM's triad sustains with {near} threads ({gbs / res[near]['triad_gb_s']:.0%}).")
             bound = inflation >= 0.75 / share and (traffic is None or traffic[1] >= 0.5 * res[near]["triad_gb_s"])
+            summary.append(f"Memory bandwidth: {'the limit' if bound else 'not the limit'} at P = {p} (tasks "
+                           f"{inflation:.2f}× as long as alone against {1 / share:.2f}× for a bandwidth-bound "
+                           "kernel; see below).")
             if bound:
                 text.append("**Bandwidth is the limit here**, as the paper found: the tasks slow down about as "
                             "much as a bandwidth-bound kernel would, and the job's traffic approaches what the "
@@ -465,10 +468,30 @@ def main():
                 if cpu_only(meta, data["runs"]) else
                 ". **Some runs may have sent tasks to a GPU** (no `--device cpu`): the paper's Fig. 11 used none."),
              ""]
+    summary = []
+    for domains in sorted({r["domains"] for r in plotted}, reverse=True):
+        top = max((r for r in plotted if r["domains"] == domains), key=lambda r: r["workers"])
+        if top["workers"] > 1:
+            summary.append(f"{domains} domains: speed-up **{top['speedup']:.2f}** with {top['workers']} working "
+                           f"processes (efficiency {top['efficiency']:.2f}; {top['seconds']:.1f} s against "
+                           f"{top['seconds'] * top['speedup']:.1f} s).")
+    first = rows[0]["report"]
+    summary.append(f"Reduction: {first['raw_triangles']:,} raw triangles → "
+                   + ", ".join(f"{r['report']['triangles']:,} ({r['domains']} domains)"
+                               for r in rows if r is next(x for x in rows if x["domains"] == r["domains"])) + ".")
+    limits = section_limits(plotted, stream, contention, meta, have_plot and bool(stream), summary)
+    sound = [c for c in checks.values()] + ([load(out, "render-check.json")] if load(out, "render-check.json") else [])
+    if sound:
+        ok = all(c["topology"]["manifold"] and c["topology"]["oriented"] and not c["topology"]["degenerate_triangles"]
+                 for c in sound)
+        summary.append(f"Topology: {len(sound)} surface(s) checked, "
+                       + ("all manifold, consistently oriented, without degenerate triangles." if ok else
+                          "**some unsound: see the table.**"))
+    lines += ["## Summary", ""] + [f"- {item}" for item in summary] + [""]
     lines += section_speedup(rows, meta, out, have_plot)
     lines += section_stages(rows)
     lines += section_triangles(rows, checks)
-    lines += section_limits(plotted, stream, contention, meta, have_plot and bool(stream))
+    lines += limits
     lines += section_pictures(out, rows)
     lines += section_provenance(meta, out)
     (out / "README.md").write_text("\n".join(lines))
