@@ -8,7 +8,7 @@
 #
 #   scripts/fuzz_campaign.sh [N] [READER...]
 set -uo pipefail
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/.." || exit 1
 runs=${1:-1000000}
 shift || true
 started=$(date -u +%Y-%m-%dT%H:%MZ)
@@ -19,6 +19,7 @@ status=$?
 seconds=$(($(date +%s) - start))
 
 mkdir -p results/fuzz
+# shellcheck source=/dev/null
 machine="$(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')), $(. /etc/os-release && echo "$PRETTY_NAME")"
 for log in build-fuzz/logs/*.log; do
     reader=$(basename "$log" .log)

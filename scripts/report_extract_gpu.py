@@ -10,7 +10,6 @@ Reads the folder's meta.json (command, machine, commit, date),
 device/bench_extract.json and the test logs under device/. Python standard
 library.
 """
-import json
 import re
 import sys
 from pathlib import Path

@@ -323,7 +323,8 @@ def section_limits(rows, stream, contention, meta, have_plot, summary):
             # afresh: about a worker's resident set, touched at least once.
             touched = domains * statistics.median(peaks[1:]) * 1024
             traffic = ("estimate", touched / report["seconds"]["job"] / 1e9, statistics.median(peaks[1:]) / 1024)
-        text = [f"At P = {p} ({domains} domains) each task runs {inflation:.2f}× as long as alone and the workers "
+        text = [f"At P = {p} ({domains} domains) the tasks take {inflation:.2f}× their time with one worker, and "
+                f"the workers "
                 f"are busy {utilisation:.0%} of the job: efficiency {r['efficiency']:.2f} ≈ "
                 f"{utilisation:.2f} / {inflation:.2f}."]
         if stream:
@@ -343,7 +344,7 @@ def section_limits(rows, stream, contention, meta, have_plot, summary):
                             f"GB/s that STREAM's triad sustains with {near} threads ({gbs / res[near]['triad_gb_s']:.0%}).")
             bound = inflation >= 0.75 / share and (traffic is None or traffic[1] >= 0.5 * res[near]["triad_gb_s"])
             summary.append(f"Memory bandwidth: {'the limit' if bound else 'not the limit'} at P = {p} (tasks "
-                           f"{inflation:.2f}× as long as alone against {1 / share:.2f}× for a bandwidth-bound "
+                           f"{inflation:.2f}× their one-worker time against {1 / share:.2f}× for a bandwidth-bound "
                            "kernel; see below).")
             if bound:
                 text.append("**Bandwidth is the limit here**, as the paper found: the tasks slow down about as "
