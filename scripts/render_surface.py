@@ -20,6 +20,7 @@ import argparse
 import json
 import os
 import platform
+import re
 import subprocess
 from datetime import datetime, timezone
 
@@ -140,16 +141,17 @@ def window(width, height):
     return out
 
 
-def label(renderer, text):
+def label(renderer, text, size=18, y=12):
     caption = vtk.vtkTextActor()
     caption.SetInput(text)
-    caption.GetTextProperty().SetFontSize(18)
-    caption.GetTextProperty().SetColor(0.1, 0.1, 0.1)
-    caption.SetPosition(12, 12)
+    caption.GetTextProperty().SetFontSize(size)
+    shade = 0.1 if size > 12 else 0.4  # provenance stamps in grey, captions dark
+    caption.GetTextProperty().SetColor(shade, shade, shade)
+    caption.SetPosition(12, y)
     renderer.AddViewProp(caption)
 
 
-def render_fragment(reduced, raw, path, size):
+def render_fragment(reduced, raw, path, size, stamp):
     win = window(2 * size, size)
     camera = None
     for i, (mesh, text) in enumerate(reduced + raw):
@@ -157,7 +159,7 @@ def render_fragment(reduced, raw, path, size):
         r.SetViewport(i / 2, 0, (i + 1) / 2, 1)
         r.SetBackground(1, 1, 1)
         r.AddActor(actor(mesh, (0.55, 0.72, 0.9), edges=True))
-        label(r, text)
+        label(r, text, y=30)
         if camera is None:
             r.ResetCamera()
             camera = r.GetActiveCamera()
@@ -168,10 +170,17 @@ def render_fragment(reduced, raw, path, size):
         else:
             r.SetActiveCamera(camera)
         win.AddRenderer(r)
+    # The stamp spans both views: a transparent renderer over the whole window.
+    overlay = vtk.vtkRenderer()
+    overlay.SetLayer(1)
+    overlay.InteractiveOff()
+    label(overlay, stamp, size=11, y=6)
+    win.SetNumberOfLayers(2)
+    win.AddRenderer(overlay)
     save(win, path)
 
 
-def render_whole(mesh, path, size):
+def render_whole(mesh, path, size, stamp):
     win = window(size, size)
     r = vtk.vtkRenderer()
     r.SetBackground(1, 1, 1)
@@ -179,6 +188,7 @@ def render_whole(mesh, path, size):
     a.GetProperty().SetInterpolationToGouraud()
     a.GetProperty().SetSpecular(0.15)
     r.AddActor(a)
+    label(r, stamp, size=11, y=6)
     r.ResetCamera()
     r.GetActiveCamera().Azimuth(30)
     r.GetActiveCamera().Elevation(25)
@@ -210,12 +220,6 @@ def main():
     vr, tr = read_ply(args.reduced)
     vw, tw = read_ply(args.raw)
     fr, fw = in_box(vr, tr, box), in_box(vw, tw, box)
-    render_fragment([(clipped(polydata(vr, touching(vr, tr, box)), box),
-                      f"reduced: {len(fr):,} triangles")],
-                    [(clipped(polydata(vw, touching(vw, tw, box)), box),
-                      f"unreduced: {len(fw):,} triangles")],
-                    os.path.join(args.out, "fragment.png"), args.size)
-    render_whole(polydata(vr, tr), os.path.join(args.out, "surface.png"), args.size * 9 // 10)
     lscpu = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
     model = next((l.split(":", 1)[1].strip() for l in lscpu.splitlines() if l.startswith("Model name")), "?")
     meta = {"command": "scripts/render_surface.py " + " ".join(
@@ -227,6 +231,13 @@ def main():
             "commit": args.commit or git_commit(),
             "date": datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
             "vtk": vtk.vtkVersion.GetVTKVersion()}
+    job = re.sub(r"^.*?(tetiso run)", r"\1", re.sub(r"\s+-o\s+\S+", "", args.job_reduced))
+    stamp = f"{job} (and --no-reduce); commit {meta['commit']}; {meta['date'][:10]}; {model}, {os.cpu_count()} cores"
+    render_fragment([(clipped(polydata(vr, touching(vr, tr, box)), box), f"reduced: {len(fr):,} triangles")],
+                    [(clipped(polydata(vw, touching(vw, tw, box)), box), f"unreduced: {len(fw):,} triangles")],
+                    os.path.join(args.out, "fragment.png"), args.size, stamp)
+    render_whole(polydata(vr, tr), os.path.join(args.out, "surface.png"), args.size * 9 // 10,
+                 stamp.replace(" (and --no-reduce)", "").replace(" --device cpu", ""))
     with open(os.path.join(args.out, "render.json"), "w") as f:
         json.dump(meta, f, indent=1)
     print(f"fragment: {len(fr):,} reduced and {len(fw):,} raw triangles in the box")
