@@ -112,15 +112,15 @@ PYTHONUNBUFFERED=1 python3 scripts/sweep_speedup.py --tetiso "$tetiso" --lattice
   --commit "$commit" --points "$points" --deadline "$(($(left) - reserve))" --keep-surfaces "$out" \
   "${perf_args[@]}" --out "$out/sweep" -- --device cpu || echo "sweep failed"
 
-if wants check; then
-  for surface in "$out"/surface-d*.ply; do
-    [[ -e $surface ]] || continue
-    name=$(basename "$surface" .ply)
-    "$tetiso" check "$surface" >"$out/check-${name#surface-}.json" ||
-      echo "check failed: $surface"
-    rm -f "$surface"  # the hashes in sweep.json identify it; the lead carries back only small files
-  done
-fi
+for surface in "$out"/surface-d*.ply; do
+  [[ -e $surface ]] || continue
+  name=$(basename "$surface" .ply)
+  if wants check; then
+    "$tetiso" check "$surface" >"$out/check-${name#surface-}.json" || echo "check failed: $surface"
+  fi
+  # sweep.json's hashes identify the surface; OUTDIR keeps only small files to bring back.
+  rm -f "$surface"
+done
 
 if wants probe && [[ $(left) -gt 80 ]]; then
   python3 scripts/probe_contention.py --tetiso "$tetiso" --probes compute,domain --cores 1-15 \
