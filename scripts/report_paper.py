@@ -418,9 +418,9 @@ def section_provenance(meta, out):
     lines += ["To measure again (a device machine with 16 cores; split the points over calls that fit its "
               "time limit) and rewrite this page:", "", "```",
               "TETISO_BIN=build/core/tetiso scripts/paper_reproduction.sh out/call1 550 "
-              "250:1,250:2,250:15,125:15,63:15,250:8",
+              "250:1,250:2,250:15,125:15,63:15",
               "TETISO_BIN=build/core/tetiso EXTRAS=check scripts/paper_reproduction.sh out/call2 550 "
-              "125:1,125:4,250:4,125:8",
+              "125:1,125:4,125:8,250:8,250:4",
               "TETISO_BIN=build/core/tetiso EXTRAS=check,probe scripts/paper_reproduction.sh out/call3 550 "
               "63:1,63:4,63:8",
               "scripts/report_paper.py out/call1 out/call2 out/call3", "```", ""]
