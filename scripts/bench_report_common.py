@@ -17,6 +17,7 @@ import re
 import subprocess
 import sys
 from datetime import datetime, timezone
+from pathlib import Path
 
 
 def to_ms(value, unit):
@@ -101,6 +102,51 @@ def command_section(meta, context, regenerate):
               f"(cv) are reported. Regenerate with the command above; `{regenerate}` rewrites this file from the "
               "JSON alone.", ""]
     return lines
+
+
+def stamp(fig, text):
+    """Writes a figure's provenance (command, machine, commit, date) small
+    along its bottom edge, so that the picture says where it comes from even
+    away from its page; the plot area is shrunk to leave it room."""
+    fig.text(0.01, 0.005, text, fontsize=6, color="0.35")
+    fig.tight_layout(rect=(0, 0.03 + 0.02 * text.count("\n"), 1, 1))
+
+
+def bench_stamp(meta):
+    """stamp()'s text for a benchmark driver's meta.json."""
+    return (f"{meta['script_cmd']}; commit {meta['commit'][:12]}; {meta['date']}\n"
+            f"{meta['cpu_model']}, {meta['cpus']} CPUs, {meta['kernel']}")
+
+
+def load_meta(folder):
+    """A results folder's meta.json: how its data files were made (command,
+    machine, commit, date), for pages whose data files do not say it."""
+    return json.loads((Path(folder) / "meta.json").read_text())
+
+
+def provenance_section(meta, regenerate):
+    """The "Command, machine, commit, date" section of a page built from a
+    meta.json: one item per run it lists, then how to rewrite the page."""
+    lines = ["## Command, machine, commit, date", ""]
+    for run in meta["runs"]:
+        lines.append(f"- {run['what']}: `{run['command']}`; commit {run['commit']}; {run['date']}; "
+                     f"files: {', '.join(f'`{f}`' for f in run['files'])}")
+    lines += [f"- Machine: {meta['machine']}", "",
+              f"`{regenerate}` rewrites this page from the files named above.", ""]
+    return lines
+
+
+def topology_summary(check):
+    """One table cell from `tetiso check` JSON: components and signatures,
+    then what would make the surface unsound."""
+    t = check["topology"]
+    signatures = "; ".join(f"genus {s['genus']}, {s['boundary_loops']} boundary loops"
+                           for s in t["signatures"])
+    closed = ", closed" if t.get("closed") else ""
+    return (f"{t['components']} component{'s' if t['components'] != 1 else ''}, {signatures}{closed}; "
+            f"non-manifold {t['non_manifold_edges']} / {t['non_manifold_vertices']}, misoriented "
+            f"{t['misoriented_edges']}, degenerate {t['degenerate_triangles']}, duplicate positions "
+            f"{t['duplicate_positions']}")
 
 
 def _run(command):

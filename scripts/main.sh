@@ -6,16 +6,9 @@
 # Writes out/surface.vtp (open it in ParaView) and out/report.json (sizes,
 # seconds, one record per task: scripts/plot_timeline.py draws them).
 #
-# With MPI, one controlling rank and one worker per core (the controller
-# mostly waits on messages): on this 2-core VM that took 57 s against 84 s for
-# one process at 2a8370e, and 37 s at 99e9003; 56 s at 35934f1, whose
-# reduction goes four times further (10,394,016 raw triangles become 363,721,
-# against 1,482,500); 17.6 s at 2f93a65, whose seams re-measure the raw
-# vertices (192,828 triangles, against 409,342 and 15.5 s for bad876c in the
-# same minute), and 19.3 s and 190,579 triangles at 1229da0 (one ring around
-# each seam); 18.3 s and 182,220 triangles at 06a3754, 23 of them with an
-# angle below 1° (its reducer no longer keeps needles). Without MPI, or a tetiso built without it, one process runs
-# every task.
+# With MPI: one controlling rank and one worker per core (the controller
+# mostly waits on messages). Without MPI, or with a tetiso built without it,
+# one process runs every task.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install.sh

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Why a job's tasks run slower when every core is busy.
 
-At 15 workers on the 16-core device machine the tasks of `tetiso run` take
+When P workers keep every core busy, the tasks of `tetiso run` can take
 longer in sum than the same tasks run by one worker, and that alone caps the
-speed-up below 15. This probe separates the candidate causes by running one
+speed-up below P. This probe separates the candidate causes by running one
 single-thread command alone on one core, then as P pinned copies at once, and
 comparing the medians:
 
@@ -16,7 +16,7 @@ comparing the medians:
             its working set (about 120 MB) fits the shared L3 cache alone,
             not as P copies; per-step medians come from the reports.
 
-    scripts/probe_contention.py --tetiso build/core/tetiso --cores 1-15 --out results/speedup/contention
+    scripts/probe_contention.py --tetiso build/core/tetiso --cores 1-15 --out out/contention
     scripts/probe_contention.py --probes domain --cores 1-15 --out /tmp/domain-only
 
 Writes OUT.json (every run's seconds, the domain reports' steps, the ratios)

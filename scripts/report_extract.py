@@ -12,7 +12,7 @@ import json
 import sys
 from pathlib import Path
 
-from bench_report_common import command_section, load_aggregates, mega, table
+from bench_report_common import bench_stamp, command_section, load_aggregates, mega, stamp, table
 
 TARGET_RATIO = 2.0  # tetiso single-thread over VTK sequential, same lattice, same run
 TARGET_PEAK_MB = 250.0  # one 10^6-node domain, generation + extraction, fresh process
@@ -141,7 +141,7 @@ def memory_section(path):
     return lines
 
 
-def plot(cases, directory):
+def plot(cases, directory, meta):
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -156,7 +156,10 @@ def plot(cases, directory):
     ax.set_xticks(range(len(keys)), labels, fontsize=7)
     ax.set_ylabel("Mtets/s (median)")
     ax.set_title("Marching tetrahedra throughput")
-    fig.tight_layout()
+    if meta:
+        stamp(fig, bench_stamp(meta))
+    else:
+        fig.tight_layout()
     fig.savefig(directory / "throughput.png", dpi=120)
     return "throughput.png"
 
@@ -173,7 +176,7 @@ def main():
             "field. Only extraction is timed (real time): building the domain and converting it to a "
             "`vtkUnstructuredGrid` happen once, outside the timed loop.", ""]
     out += ["## Throughput", ""] + throughput_section(cases)
-    picture = plot(cases, directory)
+    picture = plot(cases, directory, meta)
     if picture:
         out += [f"![throughput]({picture})", ""]
     out += ["## All cases", ""] + details_section(cases)

@@ -6,7 +6,7 @@ Fig. 11. Writes NAME.csv (one row per series and worker count), NAME.png
 (command, machine, commit, and every run's report with each rank's peak
 memory).
 
-    scripts/sweep_speedup.py --lattice 100 --workers 1,2 --out results/speedup/local
+    scripts/sweep_speedup.py --lattice 100 --workers 1,2 --out out/local
 
 P workers run as `mpirun -np P+1` (rank 0 controls and holds the pieces, the
 P others run tasks). Each point is the median of --repeat runs of the job's
@@ -17,7 +17,7 @@ seconds.total (MPI start-up and writing the surface included) and the wall
 time of the whole mpirun, and the largest peak resident memory of any worker
 and of rank 0 (each rank runs under scripts/rank_peak_rss.py).
 
-A long sweep can be split over several sessions (a lent machine runs one
+A long sweep can be split over several calls (a lent machine runs one
 command for at most minutes): --points runs chosen (domains:workers) pairs,
 --deadline stops starting runs that would not finish in time, the outputs are
 rewritten after every run (a run with nothing to estimate it from, the
@@ -26,13 +26,15 @@ first of a sweep, always starts), a failed run drops the rest of its series
 --merge combines the runs of earlier NAME.json files into one table and plot:
 
     scripts/sweep_speedup.py --lattice 500 --points 125:1,125:15 --deadline 500 --out part1
-    scripts/sweep_speedup.py --merge part1.json part2.json --out results/speedup/device
+    scripts/sweep_speedup.py --merge part1.json part2.json --out out/device
 """
 import argparse
 import csv
+import hashlib
 import json
 import os
 import platform
+import shutil
 import statistics
 import subprocess
 import sys
@@ -82,13 +84,18 @@ def commit(given):
 def run_once(args, domains, workers, scratch):
     report = os.path.join(scratch, "report.json")
     rss_log = os.path.join(scratch, "rss.jsonl")
-    for stale in (report, rss_log):
+    perf_log = os.path.join(scratch, "perf.csv")
+    surface = os.path.join(scratch, "surface" + args.format)
+    for stale in (report, rss_log, perf_log):
         if os.path.exists(stale):
             os.remove(stale)
-    command = ([args.mpirun, "--oversubscribe", "--bind-to", args.bind, "-np", str(workers + 1),
+    # Counted system-wide (-a): the ranks are separate processes started by mpirun.
+    perf = (["perf", "stat", "-a", "-x", ",", "-e", args.perf_events, "-o", perf_log]
+            if args.perf_events else [])
+    command = (perf + [args.mpirun, "--oversubscribe", "--bind-to", args.bind, "-np", str(workers + 1),
                 sys.executable, os.path.join(HERE, "rank_peak_rss.py"), args.tetiso, "run",
                 "--lattice", str(args.lattice), "--domains", str(domains), "--field", args.field, "--quiet",
-                "-o", os.path.join(scratch, "surface" + args.format), "--report", report] + args.extra)
+                "-o", surface, "--report", report] + args.extra)
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                TETISO_RSS_LOG=rss_log)
     started = time.perf_counter()
@@ -103,7 +110,30 @@ def run_once(args, domains, workers, scratch):
     result["wall_seconds"] = wall
     result["peak_rss_kib"] = [r["peak_rss_kib"] for r in ranks]
     result["bind"] = args.bind
+    with open(surface, "rb") as f:
+        result["surface_sha256"] = hashlib.sha256(f.read()).hexdigest()
+    if args.keep_surfaces:
+        # One file per series: the surface does not depend on the worker count
+        # (the hashes above show it), so the last run's stands for all.
+        os.makedirs(args.keep_surfaces, exist_ok=True)
+        shutil.copyfile(surface, os.path.join(args.keep_surfaces, f"surface-d{domains}{args.format}"))
+    if perf:
+        result["perf"] = read_perf(perf_log)
     return result
+
+
+def read_perf(path):
+    """perf stat -x , lines: value,unit,event,... ; uncounted events are left out."""
+    counts = {}
+    with open(path) as f:
+        for line in f:
+            fields = line.strip().split(",")
+            if len(fields) >= 3 and not line.startswith("#"):
+                try:
+                    counts[fields[2]] = float(fields[0])
+                except ValueError:
+                    pass  # "<not supported>" or "<not counted>"
+    return counts
 
 
 def median_or_blank(values, digits):
@@ -114,17 +144,22 @@ def max_or_blank(values, digits):
     return round(max(values), digits) if values else ""
 
 
-def table(runs):
-    """One row per (domains, workers), in series order (most domains first)."""
+def points(runs):
+    """(domains, workers, reports, median job seconds, the series' median at
+    one worker or None) per point, in series order (most domains first)."""
     groups = {}
     for run in runs:
         groups.setdefault((run["domains"], run["workers"]), []).append(run["report"])
     base = {d: statistics.median(r["seconds"]["job"] for r in reports)
             for (d, p), reports in groups.items() if p == 1}
+    return [(domains, p, reports, statistics.median(r["seconds"]["job"] for r in reports), base.get(domains))
+            for (domains, p), reports in sorted(groups.items(), key=lambda item: (-item[0][0], item[0][1]))]
+
+
+def table(runs):
+    """One row per (domains, workers), in series order (most domains first)."""
     rows = []
-    for (domains, p), reports in sorted(groups.items(), key=lambda item: (-item[0][0], item[0][1])):
-        seconds = statistics.median(r["seconds"]["job"] for r in reports)
-        t1 = base.get(domains)
+    for domains, p, reports, seconds, t1 in points(runs):
         rows.append({
             "domains": domains, "workers": p, "runs": len(reports), "seconds": round(seconds, 3),
             "speedup": round(t1 / seconds, 3) if t1 else "",
@@ -194,19 +229,27 @@ def title(meta):
             f"commit {meta['commit']}")
 
 
-def merge(args):
+def merged(paths, command):
+    """The runs of several outputs of this script, and one meta naming them
+    (each part's own meta, its date and command included, under "sources")."""
     runs, sources = [], []
-    for path in args.merge:
+    for path in paths:
         with open(path) as f:
             part = json.load(f)
         runs += part.pop("runs")
-        sources.append(dict(part, file=os.path.basename(path)))
+        # A merged part names its own sources: keep those, which carry the dates.
+        sources += part["sources"] if part.get("sources") else [dict(part, file=os.path.basename(path))]
     lattices = {s["lattice"] for s in sources}
     if len(lattices) != 1:
         sys.exit(f"the files are for different lattices: {sorted(lattices)}")
     commits = sorted({s["commit"] for s in sources})
-    meta = {"command": " ".join([os.path.relpath(sys.argv[0])] + sys.argv[1:]), "lattice": lattices.pop(),
-            "commit": ",".join(commits), "machine": sources[0]["machine"], "sources": sources}
+    meta = {"command": command, "lattice": lattices.pop(), "commit": ",".join(commits),
+            "machine": sources[0]["machine"], "sources": sources}
+    return meta, runs
+
+
+def merge(args):
+    meta, runs = merged(args.merge, " ".join([os.path.relpath(sys.argv[0])] + sys.argv[1:]))
     rows = write(args.out, meta, runs)
     plot(rows, title(meta), args.out + ".png")
 
@@ -240,6 +283,9 @@ def main():
     parser.add_argument("--commit", help="commit to record (default: git's HEAD, +dirty if modified)")
     parser.add_argument("--prior", nargs="+", default=[], metavar="JSON",
                         help="earlier outputs whose runs inform --deadline's estimates (not the table)")
+    parser.add_argument("--keep-surfaces", metavar="DIR", help="copy each series' surface to DIR/surface-dD.EXT")
+    parser.add_argument("--perf-events", metavar="LIST",
+                        help="run each job under perf stat -a -e LIST and record the counts (perf must work here)")
     parser.add_argument("--merge", nargs="+", metavar="JSON", help="combine the runs of earlier outputs, run nothing")
     parser.add_argument("--out", required=True, help="path prefix of the outputs")
     parser.add_argument("extra", nargs="*", help="more arguments for tetiso run (after --)")
