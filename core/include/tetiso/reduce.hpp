@@ -31,13 +31,12 @@ struct ReduceOptions {
     // flat (or evenly bent along the edge) the two leaves are: 1 for a flat
     // fan, cos(α) when a face of a leaf turns by α from its side's reference
     // face. Valid range (0, 1]. The default 0.9 lets a leaf bend by about 25°.
-    // On the paper's test surface (N = 100) max_error decides the ratio more
-    // than phi does: see results/reduce/bound_sweep.md (14x fewer triangles
-    // at 0.25 h, 16x with no bound).
+    // With max_error set, the bound usually stops a reduction before phi does.
     double phi = 0.9;
-    // Threads; 0 means OpenMP's default. The output does not depend on it.
-    // A round uses at most 16 of them, offered more or not: past that its
-    // joins cost more than they share.
+    // Threads, in [0, kMaxThreads]; 0 means OpenMP's default. The output does
+    // not depend on it. A round uses at most 16 of them, offered more or not,
+    // since its steps are short and their joins would cost more than they
+    // share.
     int threads = 1;
     // Where set, asked before every round for the threads that round may use
     // (0 or less: keep the current count); lets a job hand a running
@@ -50,11 +49,8 @@ struct ReduceOptions {
     // min(min_angle_degrees, that region's smallest angle before), so
     // collapses that clean up degenerate triangles stay possible but no
     // operation creates a triangle worse than the bound out of good ones.
-    // 1 degree is the checker's "near degenerate" line. Larger bounds cost
-    // triangles and buy little: on the N = 100 paper surface at 0.25 h
-    // (06a3754, 2-core VM), 1° gives 103,601 triangles, 30 of them with an
-    // angle below 1° and 963 below 5°; 5° gives 107,750 (+4 %), 19 and 486;
-    // 10° gives 114,320 (+10 %), 33 and 485. Valid range [0, 30].
+    // 1 degree is the checker's "near degenerate" line; larger bounds keep
+    // more triangles and remove few more bad ones. Valid range [0, 30].
     double min_angle_degrees = 1.0;
     // Absolute bound on the distance from every vertex of the input to the
     // reduced surface: every input vertex is tracked, so the bound is exact
@@ -62,12 +58,11 @@ struct ReduceOptions {
     // vertices it no longer has: then every point of each input triangle is
     // tracked, its distance plus the triangle's error kept under the bound,
     // so the bound holds at the raw vertices over any number of reductions.
-    // Between raw vertices the two surfaces can part further: on the
-    // built-in fields the sampled symmetric Hausdorff distance was
-    // 1.0-1.7 x max_error at 0.25 h and up to 2.4 x at 0.1 h
-    // (results/reduce/bound_sweep.md).
-    // <= 0 means no bound: Φ alone decides. For marching-tets surfaces 0.25 h
-    // (h the lattice spacing) keeps the symmetric distance within 0.5 h.
+    // Between raw vertices the two surfaces can part further, so the
+    // symmetric Hausdorff distance may exceed max_error; the command line's
+    // default, 0.25 h (h the lattice spacing), keeps it within 0.5 h on
+    // marching-tets surfaces. Units: those of the coordinates. <= 0 means no
+    // bound (Φ alone decides); NaN throws tetiso::Error.
     double max_error = 0.0;
     // With max_error > 0: hand the samples on in the output
     // (Piece::sample_xyz), those of every triangle that stands only for raw

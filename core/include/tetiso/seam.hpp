@@ -44,25 +44,18 @@ struct SeamOptions {
     bool reduce = true;
     ReduceOptions reduce_options;
     Reducer reducer; // empty: tetiso::reduce
-    // How far from the seam the reduction reaches, in edges. The rest of the
-    // piece was reduced before and is left exactly as it is. Since the seams
-    // re-measure the raw vertices (sample_rings), one ring reduces as far as
-    // three did, for less work: on the paper problem (N = 150, 63 domains)
-    // 0, 1, 2, 3 and 4 rings gave 145,138, 128,295, 129,705, 129,699 and
-    // 129,739 triangles, the seams' reductions taking 0.33, 0.57, 0.84, 0.96
-    // and 1.10 s on the VM.
+    // How far from the seam the reduction reaches, in edges. The rest of
+    // the piece was reduced before and is left exactly as it is. Because
+    // the seam re-measures the raw vertices it carries (sample_rings), one
+    // ring reduces about as far as more would, for less work.
     int rings = 1;
     // The raw-vertex samples (Piece::sample_xyz) a seam's result keeps: those
     // of the triangles within sample_rings edges of a vertex still locked,
     // where a later seam's region reaches. Farther ones are dropped (their
     // triangles' errors still bound them): a later seam's region that
     // reaches such a triangle measures the whole triangle instead, spending
-    // only what its error left of the budget. On the paper problem (N = 150,
-    // 63 domains, rings = 1) 0, 1 and 2 rings gave 142,374, 128,295 and
-    // 128,277 triangles, against 216,193 without samples (with rings = 3:
-    // 142,338, 129,699, 128,308, and 127,019 for 4); a domain of N = 200,
-    // 125 domains kept 32, 70, 94 and 100 % of its raw vertices at 0, 1, 2
-    // and 4.
+    // only what its error left of the budget. More rings keep more samples
+    // (larger pieces to send) for a few fewer triangles; < 0 drops them all.
     int sample_rings = 1;
 };
 
