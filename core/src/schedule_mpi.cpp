@@ -573,9 +573,9 @@ private:
     // start before it ends, and no worker loses work while rank 0 computes
     // and answers nobody. That is always so for the root, and, because the
     // queue finishes subtrees early, in practice for every seam after the
-    // last domain task (every such seam in the runs of results/speedup). Run here, such a seam skips packing both pieces,
-    // the worker's unpacking, and the same again for its result: 0.4-0.7 s
-    // of a 2.4-2.9 s tail on the device. And the root seam, which holds the
+    // last domain task. Run here, such a seam skips packing both pieces,
+    // the worker's unpacking, and the same again for its result. And the
+    // root seam, which holds the
     // whole surface several times, no longer lands on a worker. A looser rule,
     // with seams of other subtrees still in flight, could keep a finished
     // worker's result and the parent it readies waiting for rank 0.

@@ -95,8 +95,7 @@ struct TaskNode {
 // subtree joins the rest as soon as it is done, the seams along the big
 // planes run while workers are still busy with domains, and after the last
 // domain only the seams of the last few subtrees remain: the job's serial
-// tail, which also grows with the worker count, shrinks (on the 16-core
-// device at N = 500 it halved: results/speedup/README.md, session 14).
+// tail, which also grows with the worker count, shrinks.
 std::vector<TaskNode> task_tree(const std::vector<DomainTreeNode>& partition_tree);
 
 // The threads a task runs with: `count` to begin with and, where `more` is
