@@ -29,7 +29,6 @@
 #include <deque>
 #include <limits>
 #include <map>
-#include <set>
 #include <thread>
 
 #include "tetiso/placement.hpp"
@@ -454,7 +453,8 @@ NodeLayout node_layout(int rank, int ranks, const JobConfig& config) {
     MPI_Gather(mine, 4, MPI_INT, all.data(), 4, MPI_INT, 0, MPI_COMM_WORLD);
     if (rank != 0) return layout;
     std::map<int, int> node_of_leader;
-    std::vector<int> gpu_count_of; // by node
+    std::vector<int> gpu_count_of;         // by node
+    std::vector<std::vector<int>> driven;  // by node: the GPUs its ranks drive, in rank order
     for (int r = 0; r < ranks; ++r) {
         const int* row = &all[4 * static_cast<std::size_t>(r)];
         const auto [it, added] = node_of_leader.try_emplace(row[0], static_cast<int>(layout.workers.size()));
@@ -462,19 +462,20 @@ NodeLayout node_layout(int rank, int ranks, const JobConfig& config) {
             layout.workers.push_back(0);
             gpu_count_of.push_back(row[1]);
             layout.gpu_mib.push_back(row[2]);
+            driven.emplace_back();
         }
+        const auto node = static_cast<std::size_t>(it->second);
         layout.node_of.push_back(it->second);
         layout.driving.push_back(row[3]);
-        if (r != 0) ++layout.workers[static_cast<std::size_t>(it->second)];
+        if (r != 0) ++layout.workers[node];
+        if (row[3] >= 0) driven[node].push_back(row[3]);
     }
-    for (std::size_t node = 0; node < layout.workers.size(); ++node) {
-        std::vector<int> gpus = usable_gpus(config, gpu_count_of[node]);
-        const int drivers = driver_count(layout.workers[node], static_cast<int>(gpus.size()));
-        // GPUs beyond the drivers stay unused: a worker that ran their tasks
-        // would be a second process on them.
-        if (layout.workers[node] >= 2) gpus.resize(static_cast<std::size_t>(drivers));
-        layout.gpus.push_back(std::move(gpus));
-    }
+    // A node's tasks go to the GPUs its ranks drive (GPUs beyond the drivers
+    // stay unused: a worker that ran their tasks would be a second process
+    // on them), or, for a lone worker, to every usable GPU, which it runs
+    // itself.
+    for (std::size_t node = 0; node < layout.workers.size(); ++node)
+        layout.gpus.push_back(layout.workers[node] == 1 ? usable_gpus(config, gpu_count_of[node]) : driven[node]);
     return layout;
 }
 
@@ -496,16 +497,16 @@ public:
             node_of_ = nodes->node_of;
             driving_ = nodes->driving;
             const bool domains_on_cpu = job.config().device == JobConfig::Device::automatic;
-            for (std::size_t node = 0; node < nodes->gpus.size(); ++node) {
-                int drivers = 0;
-                for (int r = 0; r < ranks; ++r)
-                    if (node_of_[static_cast<std::size_t>(r)] == static_cast<int>(node) && driving_[static_cast<std::size_t>(r)] >= 0) {
-                        ++drivers;
-                        driver_of_gpu_[{static_cast<int>(node), driving_[static_cast<std::size_t>(r)]}] = r;
-                    }
-                placements_.emplace_back(job, nodes->workers[node] - drivers, nodes->gpus[node], nodes->gpu_mib[node],
-                                         domains_on_cpu);
+            std::vector<int> drivers(nodes->gpus.size(), 0); // by node
+            for (int r = 0; r < ranks; ++r) {
+                const int node = node_of_[static_cast<std::size_t>(r)], gpu = driving_[static_cast<std::size_t>(r)];
+                if (gpu < 0) continue;
+                ++drivers[static_cast<std::size_t>(node)];
+                driver_of_gpu_[{node, gpu}] = r;
             }
+            for (std::size_t node = 0; node < nodes->gpus.size(); ++node)
+                placements_.emplace_back(job, nodes->workers[node] - drivers[node], nodes->gpus[node],
+                                         nodes->gpu_mib[node], domains_on_cpu);
         }
     }
 
@@ -637,7 +638,7 @@ private:
                 continue;
             int borrower = -1;
             for (const auto& [worker, task] : running_) {
-                if (!cores_known_[static_cast<std::size_t>(worker)] || on_gpu_.count(worker) > 0) continue;
+                if (!cores_known_[static_cast<std::size_t>(worker)] || runs_on_gpu(worker)) continue;
                 if (borrower < 0 || lends_[worker] < lends_[borrower] ||
                     (lends_[worker] == lends_[borrower] && dispatched_at_[worker] > dispatched_at_[borrower]))
                     borrower = worker;
@@ -670,6 +671,13 @@ private:
     // Hands the next task to `worker` (--device cpu: no placement).
     void dispatch(int worker) {
         send_task(worker, queue_.pop(), -1);
+    }
+
+    // Whether `worker`'s task runs on a GPU (its grant is for one).
+    bool runs_on_gpu(int worker) const {
+        const auto it = placed_.find(worker);
+        return it != placed_.end() &&
+               placements_[static_cast<std::size_t>(it->second.node)].gpu_of(it->second.grant.device) >= 0;
     }
 
     bool drives_gpu(int worker) const {
@@ -787,7 +795,6 @@ private:
         }
         send(out.bytes, worker, kTask);
         running_[worker] = task;
-        if (gpu >= 0) on_gpu_.insert(worker);
         in_flight_.update(job_, running_, ranks_);
         dispatched_at_[worker] = seconds();
     }
@@ -832,7 +839,6 @@ private:
         piece(record.task) = in.get_piece();
         result_.tasks.push_back(record);
         running_.erase(worker);
-        on_gpu_.erase(worker);
         in_flight_.update(job_, running_, ranks_);
         end_lends_to(worker);
         queue_.complete(record.task);
@@ -848,7 +854,6 @@ private:
             placed_.erase(it);
         }
         running_.erase(worker);
-        on_gpu_.erase(worker);
         in_flight_.update(job_, running_, ranks_);
         end_lends_to(worker);
     }
@@ -887,7 +892,6 @@ private:
     std::vector<int> lent_to_;           // lender -> borrower
     std::map<int, int> lends_;           // borrower -> lends it has
     std::map<int, double> dispatched_at_; // worker -> when its task was sent
-    std::set<int> on_gpu_;                // workers whose task runs on a GPU
     // --device auto or gpu: a manager per node, the ranks that drive its
     // GPUs, and each task's grant from the request to its result.
     std::vector<int> node_of_;                 // by rank

@@ -104,9 +104,9 @@ std::vector<TaskNode> task_tree(const std::vector<DomainTreeNode>& partition_tre
 struct TaskThreads {
     int count = 1;
     std::function<int()> more;
-    // Where a domain task runs when its place was decided for it
-    // (--device auto): GPU `gpu` of the node, or the CPU (-1). Unset: the
-    // job's --device.
+    // Where a domain task runs when a resource manager placed it (--device
+    // auto, and every task of an MPI job): GPU `gpu` of the node, or the CPU
+    // (-1). Unset: the job's --device.
     std::optional<int> gpu;
 };
 
@@ -134,13 +134,13 @@ struct TaskRecord {
         std::int32_t gpu = -1;
         double upload = 0, download = 0;
     } stages;
+    // With --device auto (or gpu under MPI): the seconds the node's resource
+    // manager predicted for the task on the device it granted, and how long
+    // the task waited for that grant (0 otherwise).
+    double predicted_seconds = 0, wait_seconds = 0;
     // A domain task's lowest and highest field value (none, low > high,
     // where the values stayed on a GPU): a surface that comes out empty
     // says whether its level lies outside them.
-    // With --device auto: the seconds the node's resource manager predicted
-    // for the task on the device it granted, and how long the task waited
-    // for that grant (0 otherwise).
-    double predicted_seconds = 0, wait_seconds = 0;
     float field_low = std::numeric_limits<float>::infinity();
     float field_high = -std::numeric_limits<float>::infinity();
 };
