@@ -176,14 +176,14 @@ def write_page(folder):
     lines += ["## Against the targets", "",
               "- N = 500, 125 domains: auto is faster than cpu on the same machine in the same call, but far from "
               "2 s and 10×. A domain task takes about 0.12 s on the GPU (results/reduce-gpu: 122.5 ms), so 125 of "
-              "them alone would take 15 s there; the GPU and 14 CPU cores together finish the domains at about "
-              "the sum of their rates. The target needs a domain task an order of magnitude faster on the GPU, "
+              "them alone would take 15 s there; the GPU and 14 CPU cores share the domains, so they can at best "
+              "finish them at the sum of their rates. The target needs a domain task an order of magnitude faster on the GPU, "
               "which is the reduction's per-round cost (results/reduce-gpu says where it goes).",
               "- Speed-up of the 250-domain CPU series at 15 workers (target ≥ 13): see results/paper-reproduction, "
               "measured on the same machine kind.",
               "- N = 1000, 1000 domains on two GPUs: not run. The two-GPU machine was not lent; the job runs one "
-              "driving process per GPU of a node, so a second GPU is used as it is. The one-GPU figures above are "
-              "what exists.", ""]
+              "driving process per GPU of a node, so a second GPU would get its own, but no run here measures that. "
+              "The one-GPU figures above are what exists.", ""]
 
     lines += ["## Command, machine, commit, date", "",
               f"- Command: `{meta['script_cmd']}` (each case: `{meta['launcher']} tetiso run --lattice N --domains D "
@@ -195,7 +195,8 @@ def write_page(folder):
               f"- Compiler: {meta['compiler']}; environment `{meta['environment']}`",
               f"- Date: {meta['date']}; load average before {meta['load_before']}",
               "",
-              "One run per case: the machine is shared, and times vary by about a tenth between calls. "
+              "One run per case on a shared machine: a single run's time may differ in another call, and this folder "
+              "holds no repeat to say by how much. "
               "`scripts/report_hardware.py` rewrites this page from the files in this folder.", ""]
     (folder / "README.md").write_text("\n".join(lines))
     print(f"wrote {folder / 'README.md'}")

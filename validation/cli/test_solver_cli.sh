@@ -25,7 +25,8 @@ mkdir -p "$keep"
 for f in cube-ascii.vtu cube-raw-zlib.vtu cube-base64-zlib-h64.vtu cube-4.1-binary.msh cube-2.2.msh pieces.pvtu; do
     expect 0 "extract $f" -- "$tetiso" extract --mesh "$solver/$f" --array distance --level 1.5 -o "$out/s.ply"
     cp "$out/s.ply" "$keep/$f.ply"
-    same "extract $f is extract cube-ascii.vtu" "$keep/cube-ascii.vtu.ply" "$keep/$f.ply"
+    # cube-ascii.vtu is the reference: comparing it with itself could not fail.
+    [ "$f" = cube-ascii.vtu ] || same "extract $f is extract cube-ascii.vtu" "$keep/cube-ascii.vtu.ply" "$keep/$f.ply"
 done
 expect 0 "run over a .msh (METIS)" -- "$tetiso" run --mesh "$solver/cube-4.1.msh" --array distance --level 1.5 --domains 3 -o "$out/m.ply"
 expect 0 "run over a .pvtu, unreduced" -- "$tetiso" run --mesh "$solver/pieces.pvtu" --array distance --level 1.5 --no-reduce -o "$out/p.ply"
