@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <vector>
 
 #include <unistd.h>
 
@@ -106,20 +107,16 @@ void write_report(const nlohmann::json& report, const std::filesystem::path& pat
 }
 
 void add_device_options(CLI::App& cmd, DeviceChoice& choice, const std::string& what, bool automatic) {
+    std::vector<std::string> devices{"cpu", "gpu"};
+    std::string help = "Where " + what + " run: cpu, or gpu (CUDA; the same bytes either way)";
     if (automatic) {
         choice.device = "auto";
-        cmd.add_option("--device", choice.device,
-                       "Where " + what + " run: cpu, gpu (CUDA), or auto (each task where its node's resource "
-                       "manager predicts it ends first: the CPU or any of the node's GPUs; the CPU alone where "
-                       "there is no GPU); the same bytes every way")
-            ->check(CLI::IsMember({"cpu", "gpu", "auto"}))
-            ->capture_default_str();
-    } else {
-        cmd.add_option("--device", choice.device,
-                       "Where " + what + " run: cpu, or gpu (CUDA; the same bytes either way)")
-            ->check(CLI::IsMember({"cpu", "gpu"}))
-            ->capture_default_str();
+        devices.push_back("auto");
+        help = "Where " + what + " run: cpu, gpu (CUDA), or auto (each task where its node's resource manager "
+               "predicts it ends first: the CPU or any of the node's GPUs; the CPU alone where there is no GPU); "
+               "the same bytes every way";
     }
+    cmd.add_option("--device", choice.device, help)->check(CLI::IsMember(devices))->capture_default_str();
     cmd.add_option("--gpu", choice.gpu, "With --device gpu: which CUDA device (0-based, after CUDA_VISIBLE_DEVICES)")
         ->check(CLI::NonNegativeNumber)
         ->capture_default_str();
