@@ -12,7 +12,7 @@
 #include <cstring>
 #include <limits>
 
-#include "io_formats.hpp"
+#include "mapped_file.hpp"
 #include "tetiso/error.hpp"
 
 namespace tetiso {
@@ -412,8 +412,10 @@ MeshArrays parse_msh(std::string_view bytes, const std::string& name, const std:
 }
 
 MeshArrays read_msh(const std::filesystem::path& path, const std::string& view) {
-    const std::string bytes = detail::read_whole_file(path);
-    return parse_msh(bytes, path.string(), view);
+    // Mapped, as read_vtu's pieces are: the parser only scans the bytes, and
+    // a copy of a large binary mesh costs as much as parsing it.
+    const detail::MappedFile file(path);
+    return parse_msh(file.bytes(), path.string(), view);
 }
 
 } // namespace tetiso

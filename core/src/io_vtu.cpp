@@ -590,12 +590,12 @@ MeshArrays VtuParser::parse(const VtuRequest& request) {
     if (ids_array) {
         if (ids_array.attribute("NumberOfComponents").as_int(1) != 1)
             fail("node id array '" + ids_name + "' has more than one component");
-        const auto ids = read_array<std::int64_t>(ids_array, points, "node id array '" + ids_name + "'");
+        // Read straight into the result (GlobalId is 64-bit), not copied there.
+        out.ids = read_array<GlobalId>(ids_array, points, "node id array '" + ids_name + "'");
         for (std::size_t i = 0; i < points; ++i)
-            if (ids[i] < 0 || ids[i] > kMaxGlobalId)
-                fail("node id array '" + ids_name + "': id " + std::to_string(ids[i]) + " of point " + std::to_string(i) +
-                     " is outside [0, 2^32)");
-        out.ids.assign(ids.begin(), ids.end());
+            if (out.ids[i] < 0 || out.ids[i] > kMaxGlobalId)
+                fail("node id array '" + ids_name + "': id " + std::to_string(out.ids[i]) + " of point " +
+                     std::to_string(i) + " is outside [0, 2^32)");
     } else if (!request.node_ids.empty() || request.require_node_ids) {
         std::string names;
         for (const pugi::xml_node b : point_data.children("DataArray")) {

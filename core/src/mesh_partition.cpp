@@ -147,6 +147,36 @@ void detail::build_merge_tree(const std::vector<std::int64_t>& part_tets, const 
     lay_out(match_bottom_up(part_tets, weights), 2 * static_cast<int>(part_tets.size()) - 2, tree, source_id);
 }
 
+void detail::group_shared_edges(const std::vector<std::pair<EdgeKey, int>>& holders, std::vector<EdgeKey>& keys,
+                                std::vector<std::int64_t>& first, std::vector<int>& parts, PairWeights& weights) {
+    first.push_back(0);
+    for (std::size_t i = 0; i < holders.size();) {
+        std::size_t j = i + 1;
+        while (j < holders.size() && holders[j].first == holders[i].first) ++j;
+        if (j - i > 1) {
+            keys.push_back(holders[i].first);
+            for (std::size_t a = i; a < j; ++a) {
+                parts.push_back(holders[a].second);
+                for (std::size_t b = a + 1; b < j; ++b) ++weights[{holders[a].second, holders[b].second}];
+            }
+            first.push_back(static_cast<std::int64_t>(parts.size()));
+        }
+        i = j;
+    }
+}
+
+std::vector<std::vector<int>> detail::neighbour_lists(const PairWeights& weights, const std::vector<int>& domain_of_source) {
+    std::vector<std::vector<int>> neighbours(domain_of_source.size());
+    for (const auto& [pq, weight] : weights) {
+        const int a = domain_of_source[static_cast<std::size_t>(pq.first)];
+        const int b = domain_of_source[static_cast<std::size_t>(pq.second)];
+        neighbours[static_cast<std::size_t>(a)].push_back(b);
+        neighbours[static_cast<std::size_t>(b)].push_back(a);
+    }
+    for (auto& n : neighbours) std::sort(n.begin(), n.end());
+    return neighbours;
+}
+
 namespace {
 
 // Offsets of a counting sort: first[k] .. first[k + 1] for bucket k.
@@ -277,20 +307,7 @@ MeshPartition::MeshPartition(Domain mesh, const std::vector<std::int32_t>& part,
     holders.erase(std::unique(holders.begin(), holders.end()), holders.end());
     PairWeights weights;
     std::vector<int> shared_source; // each shared edge's domains, source ids
-    shared_first_.push_back(0);
-    for (std::size_t i = 0; i < holders.size();) {
-        std::size_t j = i;
-        while (j < holders.size() && holders[j].first == holders[i].first) ++j;
-        if (j - i > 1) {
-            shared_keys_.push_back(holders[i].first);
-            for (std::size_t a = i; a < j; ++a) {
-                shared_source.push_back(holders[a].second);
-                for (std::size_t b = a + 1; b < j; ++b) ++weights[{holders[a].second, holders[b].second}];
-            }
-            shared_first_.push_back(static_cast<std::int64_t>(shared_source.size()));
-        }
-        i = j;
-    }
+    detail::group_shared_edges(holders, shared_keys_, shared_first_, shared_source, weights);
     std::vector<std::pair<EdgeKey, std::int32_t>>().swap(holders);
 
     // The tree, and the domains renumbered in its leaf order.
@@ -299,12 +316,7 @@ MeshPartition::MeshPartition(Domain mesh, const std::vector<std::int32_t>& part,
     for (int d = 0; d < parts; ++d) domain_of_source[static_cast<std::size_t>(source_id_[static_cast<std::size_t>(d)])] = d;
     const auto domain_of = [&](std::int32_t p) { return domain_of_source[static_cast<std::size_t>(p)]; };
 
-    neighbours_.resize(static_cast<std::size_t>(parts));
-    for (const auto& [pq, weight] : weights) {
-        neighbours_[static_cast<std::size_t>(domain_of(pq.first))].push_back(domain_of(pq.second));
-        neighbours_[static_cast<std::size_t>(domain_of(pq.second))].push_back(domain_of(pq.first));
-    }
-    for (auto& n : neighbours_) std::sort(n.begin(), n.end());
+    neighbours_ = detail::neighbour_lists(weights, domain_of_source);
 
     shared_domains_.resize(shared_source.size());
     std::vector<std::int64_t> shared_per_domain(static_cast<std::size_t>(parts), 0);

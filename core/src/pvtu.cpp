@@ -366,31 +366,12 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
     // Shared edges, the pieces' adjacency and the tree.
     detail::PairWeights weights;
     std::vector<int> shared_source;
-    shared_first_.push_back(0);
-    for (std::size_t i = 0; i < boundary_edges.size();) {
-        std::size_t j = i + 1;
-        while (j < boundary_edges.size() && boundary_edges[j].first == boundary_edges[i].first) ++j;
-        if (j - i > 1) {
-            shared_keys_.push_back(boundary_edges[i].first);
-            for (std::size_t a = i; a < j; ++a) {
-                shared_source.push_back(boundary_edges[a].second);
-                for (std::size_t b = a + 1; b < j; ++b) ++weights[{boundary_edges[a].second, boundary_edges[b].second}];
-            }
-            shared_first_.push_back(static_cast<std::int64_t>(shared_source.size()));
-        }
-        i = j;
-    }
+    detail::group_shared_edges(boundary_edges, shared_keys_, shared_first_, shared_source, weights);
     std::vector<std::pair<EdgeKey, int>>().swap(boundary_edges);
     detail::build_merge_tree(part_tets, weights, tree_, source_id_);
     std::vector<int> domain_of_source(pieces_.size());
     for (int d = 0; d < parts; ++d) domain_of_source[static_cast<std::size_t>(source_id_[static_cast<std::size_t>(d)])] = d;
-    neighbours_.resize(pieces_.size());
-    for (const auto& [pq, weight] : weights) {
-        const int a = domain_of_source[static_cast<std::size_t>(pq.first)], b = domain_of_source[static_cast<std::size_t>(pq.second)];
-        neighbours_[static_cast<std::size_t>(a)].push_back(b);
-        neighbours_[static_cast<std::size_t>(b)].push_back(a);
-    }
-    for (auto& n : neighbours_) std::sort(n.begin(), n.end());
+    neighbours_ = detail::neighbour_lists(weights, domain_of_source);
     shared_domains_.resize(shared_source.size());
     for (std::size_t e = 0; e + 1 < shared_first_.size(); ++e) {
         const auto first = shared_domains_.begin() + shared_first_[e], last = shared_domains_.begin() + shared_first_[e + 1];

@@ -275,6 +275,11 @@ TEST(SolverMeshes, BadInputsAreOneErrorNamingTheFile) {
     }
 }
 
+// What building the partition of `source` throws, or "(no error)".
+std::string pvtu_error(const MeshSource& source) {
+    return message([&] { PvtuPartition pieces(source); });
+}
+
 TEST(SolverMeshes, InconsistentPiecesAreRefusedByName) {
     const Scratch scratch;
     const auto pvtu_message = [&](const std::string& node_ids = "") {
@@ -282,7 +287,7 @@ TEST(SolverMeshes, InconsistentPiecesAreRefusedByName) {
         source.path = scratch.path("pieces.pvtu");
         source.array = "distance";
         source.node_ids = node_ids;
-        return message([&] { PvtuPartition pieces(source); });
+        return pvtu_error(source);
     };
     EXPECT_EQ(pvtu_message(), "(no error)");
     // No ids: the message names the integer arrays there are.
@@ -325,6 +330,16 @@ std::string ascii_piece(const std::vector<std::array<double, 3>>& points, const 
            "</DataArray></Cells></Piece></UnstructuredGrid></VTKFile>";
 }
 
+// A .pvtu of the pieces a.vtu and b.vtu in `scratch`, read with the field f.
+MeshSource two_pieces(const Scratch& scratch) {
+    scratch.write("two.pvtu", "<VTKFile type=\"PUnstructuredGrid\"><PUnstructuredGrid><Piece Source=\"a.vtu\"/>"
+                              "<Piece Source=\"b.vtu\"/></PUnstructuredGrid></VTKFile>");
+    MeshSource source;
+    source.path = scratch.path("two.pvtu");
+    source.array = "f";
+    return source;
+}
+
 TEST(SolverMeshes, PiecesThatDisagreeOnAValueAreRefused) {
     const Scratch scratch;
     // Two tetrahedra sharing the face of ids 0, 1, 2, one per piece.
@@ -334,11 +349,7 @@ TEST(SolverMeshes, PiecesThatDisagreeOnAValueAreRefused) {
     b_points.push_back({0, 0, -1});
     scratch.write("a.vtu", ascii_piece(a_points, {0, 1, 2, 3}, {0, 1, 2, 3}, {0, 1, 2, 3}));
     scratch.write("b.vtu", ascii_piece(b_points, {0, 1, 2, 4}, {0, 1, 2, 4}, {0, 1, 2, 3}));
-    scratch.write("two.pvtu", "<VTKFile type=\"PUnstructuredGrid\"><PUnstructuredGrid><Piece Source=\"a.vtu\"/>"
-                              "<Piece Source=\"b.vtu\"/></PUnstructuredGrid></VTKFile>");
-    MeshSource source;
-    source.path = scratch.path("two.pvtu");
-    source.array = "f";
+    MeshSource source = two_pieces(scratch);
     {
         const PvtuPartition pieces(source);
         EXPECT_EQ(pieces.node_count(), 5);
@@ -346,7 +357,7 @@ TEST(SolverMeshes, PiecesThatDisagreeOnAValueAreRefused) {
         EXPECT_TRUE(pieces.domains_of_edge(0, 3).empty());
     }
     scratch.write("b.vtu", ascii_piece(b_points, {0, 1, 2, 4}, {0, 1.5, 2, 4}, {0, 1, 2, 3}));
-    const std::string what = message([&] { PvtuPartition pieces(source); });
+    const std::string what = pvtu_error(source);
     EXPECT_NE(what.find(scratch.path("b.vtu").string() + ": node id 1 has value 1.5"), std::string::npos) << what;
     EXPECT_NE(what.find("a.vtu gives it 1"), std::string::npos) << what;
     // DOLFINx's cells: Lagrange tetrahedra (type 71) of 4 points are linear
@@ -359,10 +370,10 @@ TEST(SolverMeshes, PiecesThatDisagreeOnAValueAreRefused) {
     source.path = scratch.path("two.pvtu");
     // A node id given to two points of one piece.
     scratch.write("b.vtu", ascii_piece(b_points, {0, 1, 2, 1}, {0, 1, 2, 4}, {0, 1, 2, 3}));
-    EXPECT_NE(message([&] { PvtuPartition pieces(source); }).find("node id 1 is given to points"), std::string::npos);
+    EXPECT_NE(pvtu_error(source).find("node id 1 is given to points"), std::string::npos);
     // Ids beyond 32 bits.
     scratch.write("b.vtu", ascii_piece(b_points, {0, 1, 2, -4}, {0, 1, 2, 4}, {0, 1, 2, 3}));
-    EXPECT_NE(message([&] { PvtuPartition pieces(source); }).find("outside [0, 2^32)"), std::string::npos);
+    EXPECT_NE(pvtu_error(source).find("outside [0, 2^32)"), std::string::npos);
 }
 
 // Ranks simulated by threads: each builds the partition with its share of
@@ -426,11 +437,7 @@ TEST(SolverMeshes, SparseIdsSurviveASplit) {
     const std::vector<std::array<double, 3>> b_points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, -1}};
     scratch.write("a.vtu", ascii_piece(a_points, {10, 2000, 5, 4000000000}, {0, 1, 2, 3}, {0, 1, 2, 3}));
     scratch.write("b.vtu", ascii_piece(b_points, {10, 2000, 5, 7}, {0, 1, 2, 4}, {0, 1, 2, 3}));
-    scratch.write("two.pvtu", "<VTKFile type=\"PUnstructuredGrid\"><PUnstructuredGrid><Piece Source=\"a.vtu\"/>"
-                              "<Piece Source=\"b.vtu\"/></PUnstructuredGrid></VTKFile>");
-    MeshSource source;
-    source.path = scratch.path("two.pvtu");
-    source.array = "f";
+    const MeshSource source = two_pieces(scratch);
     const PvtuPartition pieces(source);
     EXPECT_EQ(pieces.node_count(), 5);
     EXPECT_EQ(pieces.domains_of_edge(10, 2000), (std::vector<int>{0, 1}));
