@@ -361,6 +361,7 @@ template <class T, class S>
 void convert_all(std::string_view bytes, std::vector<T>& out, bool& ok) {
     const std::size_t n = bytes.size() / sizeof(S);
     out.resize(n);
+    if (n == 0) return; // an empty array's data() may be null, which memcpy must not see
     if constexpr (std::is_same_v<T, S>) {
         std::memcpy(out.data(), bytes.data(), n * sizeof(S));
     } else {
