@@ -7,7 +7,7 @@
 # (bench/bench_stream.cpp at 1 ... all threads) and, where perf can count them
 # here, the job's last-level-cache misses; and the topology of every series'
 # final surface (`tetiso check`). scripts/report_paper.py turns one or more
-# OUTDIRs into results/paper-reproduction/.
+# OUTDIRs into results/paper-reproduction/ and results/paper-reproduction.md.
 #
 #   scripts/paper_reproduction.sh OUTDIR BUDGET_S [POINTS]
 #   scripts/paper_reproduction.sh out/call1 550 250:1,250:2,250:15,125:15,63:15

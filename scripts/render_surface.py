@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Draws the pictures of results/paper-reproduction, headless: the same small
+"""Draws the pictures of results/paper-reproduction.md, headless: the same small
 box of the reduced and of the unreduced surface side by side with their
 edges (the paper's Fig. 10), and one view of the whole reduced surface.
 

@@ -179,7 +179,7 @@ def write_page(folder):
               "them alone would take 15 s there; the GPU and 14 CPU cores share the domains, so they can at best "
               "finish them at the sum of their rates. The target needs a domain task an order of magnitude faster on the GPU, "
               "which is the reduction's per-round cost (results/reduce-gpu says where it goes).",
-              "- Speed-up of the 250-domain CPU series at 15 workers (target ≥ 13): see results/paper-reproduction, "
+              "- Speed-up of the 250-domain CPU series at 15 workers (target ≥ 13): see results/paper-reproduction.md, "
               "measured on the same machine kind.",
               "- N = 1000, 1000 domains on two GPUs: not run. The two-GPU machine was not lent; the job runs one "
               "driving process per GPU of a node, so a second GPU would get its own, but no run here measures that. "

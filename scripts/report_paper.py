@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Writes results/paper-reproduction/README.md, the paper's experiment as
+"""Writes results/paper-reproduction.md, the paper's experiment as
 tetiso measures it: speed-up against working MPI processes for 250, 125 and
 63 domains (the paper's Fig. 11, plotted as speedup.png), the time of each
 stage, raw and reduced triangle counts, the topology of each series' final
@@ -15,7 +15,8 @@ stream.json (bench_stream), check-dD.json (`tetiso check` of D domains'
 surface), contention.json (scripts/probe_contention.py) and machine.txt (or
 any *machine*.txt).
 They are copied into OUT as sweep.json (merged), stream.json, check-dD.json,
-contention.json and machine.txt, and the page is written from OUT alone;
+contention.json and machine.txt, and the page, OUT.md beside the folder
+(results/paper-reproduction.md), is written from OUT alone;
 with no INPUT it is rewritten from what OUT holds. The pictures, render.json
 and render-check.json (scripts/render_surface.py and `tetiso check` of the
 drawn surface) stay in OUT across new inputs. Every number on the page comes
@@ -195,7 +196,7 @@ def speedup_rows(runs):
 def section_speedup(rows, meta, out, have_plot):
     lines = ["## Speed-up", ""]
     if have_plot:
-        lines += ["![speed-up against working MPI processes](speedup.png)", ""]
+        lines += [f"![speed-up against working MPI processes]({out.name}/speedup.png)", ""]
     lines += ["Job seconds are the report's `seconds.job` (every task, domain generation included; MPI start-up "
               "and writing the surface excluded), the median where a point ran more than once. Speed-up is "
               "T(1)/T(P) within a series, efficiency speed-up / P. Peak memory is the largest resident set of any "
@@ -275,7 +276,7 @@ def section_triangles(rows, checks):
     return lines
 
 
-def section_limits(rows, stream, contention, meta, have_plot, summary):
+def section_limits(rows, stream, contention, meta, have_plot, summary, out):
     lines = ["## What limits the speed-up", "",
              "The paper puts its lost speed-up down to memory bandwidth: the more processes run, the more "
              "they load the memory subsystem. Efficiency E = T(1)/(P·T(P)) splits into two factors: how much "
@@ -306,7 +307,7 @@ def section_limits(rows, stream, contention, meta, have_plot, summary):
                         [[t, fmt(x["copy_gb_s"]), fmt(x["triad_gb_s"]), f"{x['triad_gb_s'] / t / one['triad_gb_s']:.2f}"]
                          for t, x in sorted(res.items())]), ""]
         if have_plot:
-            lines += ["![job efficiency against the per-core share of STREAM bandwidth](bandwidth.png)", ""]
+            lines += [f"![job efficiency against the per-core share of STREAM bandwidth]({out.name}/bandwidth.png)", ""]
     else:
         lines += ["No STREAM measurement in these data (scripts/paper_reproduction.sh runs bench/bench_stream.cpp).",
                   ""]
@@ -381,9 +382,9 @@ def section_pictures(out, rows):
              "(right, the same job with `--no-reduce`), clipped to the same box "
              f"{render['box']} and drawn with their edges, like the paper's Fig. 10: "
              f"{render['fragment_triangles']['reduced']:,} against {render['fragment_triangles']['raw']:,} "
-             "triangles in the box.", "", "![reduced and raw fragment](fragment.png)", "",
+             "triangles in the box.", "", f"![reduced and raw fragment]({out.name}/fragment.png)", "",
              f"The whole reduced surface ({render['triangles']['reduced']:,} triangles; raw "
-             f"{render['triangles']['raw']:,}):", "", "![the reduced surface](surface.png)", "",
+             f"{render['triangles']['raw']:,}):", "", f"![the reduced surface]({out.name}/surface.png)", "",
              f"Made with `{render['command']}` from `{render['jobs']['reduced']}` and `{render['jobs']['raw']}`; "
              f"{render['machine']}; commit {render['commit']}; {render['date']}; VTK {render['vtk']} offscreen. "
              "The surfaces are byte-identical on any machine, so they are drawn where the speed-up was not "
@@ -392,7 +393,7 @@ def section_pictures(out, rows):
     if check:
         crossings = check.get("self_intersections")
         lines += [f"`tetiso check` of the drawn reduced surface: {topology_summary(check)}; self-intersections "
-                  + ("not counted" if crossings is None else f"{crossings}") + " (render-check.json).", ""]
+                  + ("not counted" if crossings is None else f"{crossings}") + f" ({out.name}/render-check.json).", ""]
     same = [r for r in rows if r["domains"] == render["domains"]]
     if same:
         counts = {x["triangles"] for r in same for x in r["reports"]}
@@ -406,7 +407,7 @@ def section_pictures(out, rows):
 
 def section_provenance(meta, out):
     lines = ["## Command, machine, commit, date", "",
-             f"- Page: `scripts/report_paper.py` from the files in this folder (sweep.json merges "
+             f"- Page: `scripts/report_paper.py` from the files in {out.name}/ (sweep.json merges "
              f"{len(meta.get('sources', [])) or 1} sweep output(s); each run keeps its report with every task)."]
     for source in meta.get("sources", [meta]):
         lines.append(f"- `{source['command']}` (commit {source['commit']}, started "
@@ -414,7 +415,7 @@ def section_provenance(meta, out):
     lines += [f"- Machine: {machine_text(meta)}; MPI ranks bound to cores (`--bind-to core`); one controlling "
               "rank beside the P working ones", f"- Commit: {meta['commit']}", f"- Date: {dates(meta)}", ""]
     if (out / "machine.txt").exists():
-        lines += ["machine.txt holds the machine's lscpu, memory, kernel and MPI version.", ""]
+        lines += [f"{out.name}/machine.txt holds the machine's lscpu, memory, kernel and MPI version.", ""]
     lines += ["To measure again (a device machine with 16 cores; split the points over calls that fit its "
               "time limit) and rewrite this page:", "", "```",
               "TETISO_BIN=build/core/tetiso scripts/paper_reproduction.sh out/call1 550 "
@@ -480,7 +481,7 @@ def main():
     summary.append(f"Reduction: {first['raw_triangles']:,} raw triangles → "
                    + ", ".join(f"{r['report']['triangles']:,} ({r['domains']} domains)"
                                for r in rows if r is next(x for x in rows if x["domains"] == r["domains"])) + ".")
-    limits = section_limits(plotted, stream, contention, meta, have_plot and bool(stream), summary)
+    limits = section_limits(plotted, stream, contention, meta, have_plot and bool(stream), summary, out)
     sound = [c for c in checks.values()] + ([load(out, "render-check.json")] if load(out, "render-check.json") else [])
     if sound:
         ok = all(c["topology"]["manifold"] and c["topology"]["oriented"] and not c["topology"]["degenerate_triangles"]
@@ -495,8 +496,10 @@ def main():
     lines += limits
     lines += section_pictures(out, rows)
     lines += section_provenance(meta, out)
-    (out / "README.md").write_text("\n".join(lines))
-    print(f"wrote {out / 'README.md'}")
+    page = out.with_name(out.name + ".md")  # results/paper-reproduction.md; the folder holds its data
+    page.write_text("\n".join(lines))
+    (out / "README.md").unlink(missing_ok=True)
+    print(f"wrote {page}")
 
 
 if __name__ == "__main__":
