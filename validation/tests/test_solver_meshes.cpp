@@ -330,6 +330,50 @@ std::string ascii_piece(const std::vector<std::array<double, 3>>& points, const 
            "</DataArray></Cells></Piece></UnstructuredGrid></VTKFile>";
 }
 
+// A rank whose part of the mesh is empty writes a piece of no points and no
+// cells, every array present but empty, and a piece may hold points but no
+// cells. Both read as an empty domain in every inline encoding, including the
+// arrays whose stored type is the one read (copied whole, not converted).
+TEST(SolverMeshes, PiecesWithoutCellsReadAsEmpty) {
+    for (const std::string format : {"ascii", "binary"}) {
+        for (const bool with_points : {false, true}) {
+            SCOPED_TRACE(format + (with_points ? ", one point" : ", no point"));
+            // binary: a UInt32 byte count, then the bytes, base64-encoded.
+            const auto data = [&](const char* ascii, const char* binary) {
+                return std::string(with_points ? (format == "ascii" ? ascii : binary) : (format == "ascii" ? "" : "AAAAAA=="));
+            };
+            const auto array = [&](const char* type, const char* name, const std::string& values, int components = 1) {
+                return "<DataArray type=\"" + std::string(type) + "\" Name=\"" + name + "\" NumberOfComponents=\"" +
+                       std::to_string(components) + "\" format=\"" + format + "\">" + values + "</DataArray>";
+            };
+            const std::string empty = format == "ascii" ? "" : "AAAAAA==";
+            const std::string file =
+                "<VTKFile type=\"UnstructuredGrid\" header_type=\"UInt32\"><UnstructuredGrid><Piece NumberOfPoints=\"" +
+                std::string(with_points ? "1" : "0") + "\" NumberOfCells=\"0\"><PointData GlobalIds=\"ids\">" +
+                array("Float64", "f", data("2.5", "CAAAAA==AAAAAAAABEA=")) + array("Int64", "ids", data("7", "CAAAAA==BwAAAAAAAAA=")) +
+                "</PointData><CellData>" + array("UInt8", "vtkGhostType", empty) + "</CellData><Points>" +
+                array("Float64", "Points", data("1 2 3", "GAAAAA==AAAAAAAA8D8AAAAAAAAAQAAAAAAAAAhA"), 3) + "</Points><Cells>" +
+                array("Int32", "connectivity", empty) + array("Int32", "offsets", empty) + array("UInt8", "types", empty) +
+                "</Cells></Piece></UnstructuredGrid></VTKFile>";
+            VtuRequest request;
+            request.array = "f";
+            request.require_node_ids = true;
+            const MeshArrays piece = parse_vtu(file, "empty.vtu", request);
+            EXPECT_TRUE(piece.tets.empty());
+            EXPECT_EQ(piece.ghost_cells, 0u);
+            if (with_points) {
+                EXPECT_EQ(piece.f, std::vector<double>{2.5});
+                EXPECT_EQ(piece.ids, std::vector<GlobalId>{7});
+                EXPECT_EQ(piece.x, std::vector<double>{1});
+                EXPECT_EQ(piece.y, std::vector<double>{2});
+                EXPECT_EQ(piece.z, std::vector<double>{3});
+            } else {
+                EXPECT_TRUE(piece.f.empty() && piece.ids.empty() && piece.x.empty());
+            }
+        }
+    }
+}
+
 // A .pvtu of the pieces a.vtu and b.vtu in `scratch`, read with the field f.
 MeshSource two_pieces(const Scratch& scratch) {
     scratch.write("two.pvtu", "<VTKFile type=\"PUnstructuredGrid\"><PUnstructuredGrid><Piece Source=\"a.vtu\"/>"
