@@ -47,8 +47,8 @@ void run_split(const SplitArguments& args) {
 void add_split_command(CLI::App& app, Command& run) {
     auto args = std::make_shared<SplitArguments>();
     CLI::App* cmd = app.add_subcommand(
-        "split", "Partition a TetGen mesh and write one file per domain, for `tetiso run --split` (no rank of "
-                 "that job holds the whole mesh)");
+        "split", "Partition a mesh (.vtu, .pvtu, .msh or TetGen) and write one file per domain, for "
+                 "`tetiso run --split` (no rank of that job holds the whole mesh)");
     CLI::Option* mesh = cmd->add_option("--mesh", args->mesh,
                                         "Mesh: .vtu, .pvtu (default: its pieces are the domains), .msh, or TetGen "
                                         "BASE (BASE.node and BASE.ele)")

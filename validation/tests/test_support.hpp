@@ -34,9 +34,7 @@ inline std::string read_bytes(const std::filesystem::path& path) {
 class ScratchDirectory {
 public:
     explicit ScratchDirectory(const std::string& prefix)
-        : path_(std::filesystem::temp_directory_path() /
-                (prefix + "_" + std::to_string(::getpid()) + "_" +
-                 ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
+        : path_(std::filesystem::temp_directory_path() / (prefix + "_" + std::to_string(::getpid()) + "_" + test_name())) {
         std::filesystem::create_directories(path_);
     }
     ~ScratchDirectory() { std::filesystem::remove_all(path_); }
@@ -46,6 +44,14 @@ public:
     std::filesystem::path at(const std::string& name) const { return path_ / name; }
 
 private:
+    // One path component: a parameterised test's name holds a '/', which
+    // would leave the directory above it behind.
+    static std::string test_name() {
+        std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+        std::replace(name.begin(), name.end(), '/', '_');
+        return name;
+    }
+
     std::filesystem::path path_;
 };
 
