@@ -32,7 +32,8 @@ def main():
     clean = all(r["finding"] is None for r in readers)
     lines = ["# Fuzzing the readers", "",
              "libFuzzer over every reader of tetiso's inputs (validation/fuzz/fuzz_*.cpp), each from its seeds in "
-             "validation/fuzz/corpus/ after replaying validation/fuzz/regressions/. A finding is a crash, a hang "
+             "validation/fuzz/corpus/ and what earlier runs on the machine added, after replaying "
+             "validation/fuzz/regressions/. A finding is a crash, a hang "
              "over 10 s, a sanitizer report, more than 2 GB of memory, or an exception other than tetiso::Error. "
              + ("**No reader has a finding.**" if clean else "**Some readers have findings: see the table.**"), "",
              table(["reader", "inputs run", "exec/s", "coverage (edges)", "features", "corpus entries", "findings",
