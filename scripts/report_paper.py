@@ -498,7 +498,6 @@ def main():
     lines += section_provenance(meta, out)
     page = out.with_name(out.name + ".md")  # results/paper-reproduction.md; the folder holds its data
     page.write_text("\n".join(lines))
-    (out / "README.md").unlink(missing_ok=True)
     print(f"wrote {page}")
 
 
