@@ -61,7 +61,7 @@ nlohmann::json task_json(const TaskRecord& t) {
     }
     return {{"task", t.task},
             {"kind", t.kind == TaskKind::domain ? "domain" : "seam"},
-            {"device", t.stages.gpu >= 0 ? "gpu " + std::to_string(t.stages.gpu) : std::string("cpu")},
+            {"device", device_name(t)},
             {"first_domain", t.first_domain},
             {"domain_count", t.domain_count},
             {"rank", t.rank},
@@ -71,7 +71,6 @@ nlohmann::json task_json(const TaskRecord& t) {
             {"triangles_in", t.triangles_in},
             {"triangles_out", t.triangles_out},
             {"samples_out", t.samples_out},
-            {"device", device_name(t)},
             {"predicted_seconds", t.predicted_seconds},
             {"wait_seconds", t.wait_seconds},
             {"stage_seconds", stages}};

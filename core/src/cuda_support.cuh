@@ -93,9 +93,8 @@ __global__ void for_each_kernel(std::int64_t n, Function function) {
 // some 200 registers' worth of state uncapped): the compiler is held to the
 // registers that let three blocks share a multiprocessor (80), so that more
 // warps hide the latency of each test's long chains of loads. On an H200
-// the reduction of the N = 100 paper surface took 274 ms so, 293 ms with
-// two blocks (128 registers) and 328 ms uncapped (medians of 3, one call);
-// four blocks (64) gained nothing more.
+// the reduction ran faster so than with two blocks (128 registers) or
+// uncapped; four blocks (64) gained nothing more.
 template <class Function>
 __global__ void __launch_bounds__(kBlock, 3) for_each_heavy_kernel(std::int64_t n, Function function) {
     for (std::int64_t i = blockIdx.x * static_cast<std::int64_t>(blockDim.x) + threadIdx.x; i < n;

@@ -15,6 +15,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "byte_buffer.hpp"
 #include "io_formats.hpp"
 #include "tetiso/detail/write_atomically.hpp"
 #include "tetiso/error.hpp"
@@ -37,40 +38,27 @@ constexpr std::uint32_t kVersion = 1;
 
 // A file's bytes built up in memory, then written whole with the digest of
 // everything before it at the end.
-class ByteWriter {
+class ByteWriter : public detail::ByteWriter<std::string> {
 public:
-    template <class T>
-    void put(const T& value) {
-        static_assert(std::is_trivially_copyable_v<T>);
-        bytes_.append(reinterpret_cast<const char*>(&value), sizeof(T));
-    }
-    template <class T>
-    void put_array(const std::vector<T>& values) {
-        put(static_cast<std::uint64_t>(values.size()));
-        if (!values.empty()) bytes_.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
-    }
     void put_string(const std::string& text) {
         put(static_cast<std::uint64_t>(text.size()));
-        bytes_.append(text);
+        bytes.append(text);
     }
     // The digest written last, which the index keeps for a domain file.
     std::uint64_t write(const std::filesystem::path& path) {
-        const std::uint64_t digest = split_digest(bytes_.data(), bytes_.size());
+        const std::uint64_t digest = split_digest(bytes.data(), bytes.size());
         put(digest);
         std::ofstream out(path, std::ios::binary | std::ios::trunc);
-        out.write(bytes_.data(), static_cast<std::streamsize>(bytes_.size()));
+        out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
         out.close();
         if (!out) throw Error(path.string() + ": cannot write: " + std::strerror(errno));
         return digest;
     }
-
-private:
-    std::string bytes_;
 };
 
-// Reads back what ByteWriter wrote, checking each count against the bytes
-// left before allocating anything, so a damaged count is an error, not an
-// allocation of terabytes.
+// Reads back what ByteWriter wrote: the magic, the digest of the whole, the
+// format version, then the fields between (byte_buffer.hpp checks each
+// count against the bytes left).
 class ByteReader {
 public:
     ByteReader(std::filesystem::path path, const char (&magic)[8], const char* what)
@@ -78,60 +66,44 @@ public:
         if (bytes_.size() < sizeof(magic) + sizeof(std::uint32_t) + sizeof(std::uint64_t) ||
             std::memcmp(bytes_.data(), magic, sizeof(magic)) != 0)
             fail(std::string("not a tetiso ") + what + " file");
-        end_ = bytes_.size() - sizeof(std::uint64_t);
-        std::memcpy(&digest_, bytes_.data() + end_, sizeof(digest_));
-        if (split_digest(bytes_.data(), end_) != digest_)
+        const std::size_t end = bytes_.size() - sizeof(std::uint64_t);
+        std::memcpy(&digest_, bytes_.data() + end, sizeof(digest_));
+        if (split_digest(bytes_.data(), end) != digest_)
             fail("damaged: its contents do not match its digest");
-        at_ = sizeof(magic);
+        fields_ = detail::ByteReader(std::string_view(bytes_).substr(sizeof(magic), end - sizeof(magic)),
+                                     [this](const char* name) { fail(std::string("truncated in ") + name); });
         if (const auto version = get<std::uint32_t>(); version != kVersion)
             fail("format version " + std::to_string(version) + ", where this tetiso reads version " +
                  std::to_string(kVersion));
     }
+    ByteReader(const ByteReader&) = delete; // the check's `this` is this object's
+    ByteReader& operator=(const ByteReader&) = delete;
 
     template <class T>
     T get() {
-        static_assert(std::is_trivially_copyable_v<T>);
-        need(sizeof(T), "a value");
-        T value;
-        std::memcpy(&value, bytes_.data() + at_, sizeof(T));
-        at_ += sizeof(T);
-        return value;
+        return fields_.get<T>();
     }
     template <class T>
     std::vector<T> get_array(const char* name) {
-        const auto count = get<std::uint64_t>();
-        if (count > (end_ - at_) / sizeof(T)) fail(std::string("truncated in ") + name);
-        std::vector<T> values(static_cast<std::size_t>(count));
-        // An empty array (a one-domain split shares no edges) has no data()
-        // to copy into: memcpy must not be given null, even for 0 bytes.
-        if (count > 0) std::memcpy(values.data(), bytes_.data() + at_, values.size() * sizeof(T));
-        at_ += values.size() * sizeof(T);
-        return values;
+        return fields_.get_array<T>(name);
     }
     std::string get_string(const char* name) {
         const auto size = get<std::uint64_t>();
-        if (size > end_ - at_) fail(std::string("truncated in ") + name);
-        std::string text(bytes_.data() + at_, static_cast<std::size_t>(size));
-        at_ += text.size();
-        return text;
+        return std::string(fields_.get_bytes(static_cast<std::size_t>(size), name));
     }
     // Called after the last field: trailing bytes mean a layout this reader
     // does not know.
     void finish() {
-        if (at_ != end_) fail(std::to_string(end_ - at_) + " bytes after the last field");
-        std::string().swap(bytes_);
+        if (fields_.left() != 0) fail(std::to_string(fields_.left()) + " bytes after the last field");
+        std::string().swap(bytes_); // nothing is read after the last field
     }
     std::uint64_t digest() const { return digest_; }
     [[noreturn]] void fail(const std::string& what) const { throw Error(path_.string() + ": " + what); }
 
 private:
-    void need(std::size_t size, const char* what) const {
-        if (size > end_ - at_) fail(std::string("truncated in ") + what);
-    }
-
     std::filesystem::path path_;
     std::string bytes_;
-    std::size_t at_ = 0, end_ = 0;
+    detail::ByteReader fields_{{}, nullptr};
     std::uint64_t digest_ = 0;
 };
 

@@ -30,8 +30,21 @@ NodePlacement::NodePlacement(const Job& job, int cpu_processes, const std::vecto
       job_(job),
       domain_tets_(std::max(1.0, static_cast<double>(job.partition().tet_count()) / job.partition().domain_count())),
       task_mib_(domain_tets_ * kGpuBytesPerTet / (1 << 20) + kGpuTaskMarginMiB),
-      usable_mib_(gpu_mib * 0.95 - kGpuContextMiB),
+      usable_mib_(gpu_mib * kGpuUsableShare - kGpuContextMiB),
       domains_on_cpu_(domains_on_cpu) {}
+
+void NodePlacement::finish(const Grant& grant, double seconds, TaskRecord& record) {
+    const double transfer = record.stages.upload + record.stages.download;
+    manager.finish(grant.ticket, std::max(0.0, seconds - transfer), transfer);
+    record.predicted_seconds = grant.predicted_seconds;
+}
+
+std::vector<int> NodePlacement::usable_gpus(const JobConfig& config, int count) {
+    std::vector<int> gpus;
+    for (int g = 0; g < count; ++g)
+        if (config.device != JobConfig::Device::gpu || g == config.gpu) gpus.push_back(g);
+    return gpus;
+}
 
 ResourceRequest NodePlacement::request(int task, const Piece* left, const Piece* right) const {
     ResourceRequest r;

@@ -13,6 +13,7 @@
 
 #include <pugixml.hpp>
 
+#include "byte_buffer.hpp"
 #include "io_formats.hpp"
 #include "mapped_file.hpp"
 #include "merge_tree.hpp"
@@ -209,60 +210,29 @@ PieceScan scan_piece(const std::filesystem::path& path, const MeshSource& source
 }
 
 // A rank's scans as bytes for RankGroup::all_gather, and back.
-template <class T>
-void put(std::string& out, const T& value) {
-    out.append(reinterpret_cast<const char*>(&value), sizeof(T));
+detail::ByteReader unpacker(std::string_view bytes) {
+    return detail::ByteReader(bytes, [](const char*) {
+        throw Error("a .pvtu scan's message from another rank is truncated");
+    });
 }
-template <class T>
-void put_array(std::string& out, const std::vector<T>& values) {
-    put(out, static_cast<std::uint64_t>(values.size()));
-    if (!values.empty()) out.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
-}
-class Unpacker {
-public:
-    explicit Unpacker(std::string_view bytes) : bytes_(bytes) {}
-    template <class T>
-    T get() {
-        if (bytes_.size() - at_ < sizeof(T)) throw Error("a .pvtu scan's message from another rank is truncated");
-        T value;
-        std::memcpy(&value, bytes_.data() + at_, sizeof(T));
-        at_ += sizeof(T);
-        return value;
-    }
-    template <class T>
-    std::vector<T> get_array() {
-        const auto count = get<std::uint64_t>();
-        if (count > (bytes_.size() - at_) / sizeof(T)) throw Error("a .pvtu scan's message from another rank is truncated");
-        std::vector<T> values(static_cast<std::size_t>(count));
-        if (count == 0) return values; // memcpy takes no null pointer, even for 0 bytes
-        std::memcpy(values.data(), bytes_.data() + at_, values.size() * sizeof(T));
-        at_ += values.size() * sizeof(T);
-        return values;
-    }
-    bool done() const { return at_ == bytes_.size(); }
-
-private:
-    std::string_view bytes_;
-    std::size_t at_ = 0;
-};
 
 std::string pack(const std::string& error, const std::vector<std::pair<int, PieceScan>>& scans) {
-    std::string out;
-    put_array(out, std::vector<char>(error.begin(), error.end()));
-    put(out, static_cast<std::uint64_t>(scans.size()));
+    detail::ByteWriter<std::string> out;
+    out.put_array(std::vector<char>(error.begin(), error.end()));
+    out.put(static_cast<std::uint64_t>(scans.size()));
     for (const auto& [p, scan] : scans) {
-        put(out, static_cast<std::int64_t>(p));
-        put(out, scan.tets);
-        put(out, scan.used);
-        put(out, scan.edge_sum);
-        put(out, scan.digest);
-        put_array(out, std::vector<char>(scan.error.begin(), scan.error.end()));
-        put_array(out, scan.nodes);
+        out.put(static_cast<std::int64_t>(p));
+        out.put(scan.tets);
+        out.put(scan.used);
+        out.put(scan.edge_sum);
+        out.put(scan.digest);
+        out.put_array(std::vector<char>(scan.error.begin(), scan.error.end()));
+        out.put_array(scan.nodes);
         std::vector<EdgeKey> keys; // the piece of each is p
         for (const auto& edge : scan.edges) keys.push_back(edge.first);
-        put_array(out, keys);
+        out.put_array(keys);
     }
-    return out;
+    return std::move(out.bytes);
 }
 
 } // namespace
@@ -296,7 +266,7 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
         std::vector<std::pair<int, PieceScan>>().swap(mine);
         std::string first_error;
         for (const std::string& share : shares) {
-            Unpacker in(share);
+            detail::ByteReader in = unpacker(share);
             const auto error = in.get_array<char>();
             if (!error.empty() && first_error.empty()) first_error.assign(error.begin(), error.end());
             const auto count = in.get<std::uint64_t>();

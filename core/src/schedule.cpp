@@ -314,9 +314,8 @@ JobResult run_local(const Job& job, const Progress& progress) {
     int done = 0;
     std::optional<NodePlacement> placement;
     if (job.config().device == JobConfig::Device::automatic) {
-        std::vector<int> gpus(static_cast<std::size_t>(gpu_count()));
-        for (std::size_t g = 0; g < gpus.size(); ++g) gpus[g] = static_cast<int>(g);
-        placement.emplace(job, 1, gpus, gpus.empty() ? 0.0 : gpu_memory_mib(0));
+        const std::vector<int> gpus = NodePlacement::usable_gpus(job.config(), gpu_count());
+        placement.emplace(job, 1, gpus, gpus.empty() ? 0.0 : gpu_memory_mib(gpus.front()));
     }
     while (!queue.finished()) {
         const int task = queue.pop();
@@ -333,7 +332,6 @@ JobResult run_local(const Job& job, const Progress& progress) {
             grant = placement->manager.request(placement->request(task, left, right), seconds());
             placement->manager.start(grant.ticket, seconds());
             threads.gpu = placement->gpu_of(grant.device);
-            record.predicted_seconds = grant.predicted_seconds;
         }
         try {
             pieces[static_cast<std::size_t>(task)] = job.execute(task, left, right, record, threads);
@@ -347,10 +345,7 @@ JobResult run_local(const Job& job, const Progress& progress) {
             pieces[static_cast<std::size_t>(n.right)].reset();
         }
         record.end = seconds();
-        if (placement) {
-            const double transfer = record.stages.upload + record.stages.download;
-            placement->manager.finish(grant.ticket, std::max(0.0, record.end - record.start - transfer), transfer);
-        }
+        if (placement) placement->finish(grant, record.end - record.start, record);
         result.tasks.push_back(record);
         queue.complete(task);
         if (progress) progress(++done, job.task_count(), seconds());

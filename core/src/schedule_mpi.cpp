@@ -1,8 +1,11 @@
 // The MPI master/worker run (paper, section "Load balancing and job
 // scheduling"): rank 0 keeps the task queue and the finished pieces; a worker
 // says it is ready, receives a task with the pieces it needs, and returns the
-// piece it made, which also says it is ready again. Tasks go to whichever
-// worker asks first: load balances itself, the output does not depend on it.
+// piece it made, which also says it is ready again. Under --device cpu a
+// task goes to whichever worker asks first; under auto or gpu each node's
+// resource manager places it on a device and the worker that runs it (see
+// Controller). Either way load balances itself and the output does not
+// depend on it.
 // The seams at the end of the job, which nothing can run beside, rank 0 runs
 // itself, with threads on the cores of the workers left idle (see Controller).
 //
@@ -31,6 +34,7 @@
 #include <map>
 #include <thread>
 
+#include "byte_buffer.hpp"
 #include "tetiso/placement.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/gpu.hpp"
@@ -40,18 +44,9 @@ namespace {
 
 enum Tag : int { kReady = 1, kTask = 2, kResult = 3, kFailure = 4, kStop = 5, kLend = 6 };
 
-// Flat byte buffers for messages: PODs and arrays, in order.
-class Packer {
+// Messages between ranks: values, arrays and pieces (byte_buffer.hpp).
+class Packer : public detail::ByteWriter<std::vector<std::byte>> {
 public:
-    template <class T>
-    void put(const T& value) {
-        append(&value, sizeof(T));
-    }
-    template <class T>
-    void put_array(const std::vector<T>& values) {
-        put<std::uint64_t>(values.size());
-        append(values.data(), values.size() * sizeof(T));
-    }
     // Bytes that put_piece(piece) appends: reserving them first keeps a
     // large reply from growing by doubling, which on the root seam's worker
     // held up to twice the surface's size at once.
@@ -75,36 +70,13 @@ public:
         put_array(piece.sample_triangle);
         put_array(piece.sampled);
     }
-    std::vector<std::byte> bytes;
-
-private:
-    void append(const void* data, std::size_t size) {
-        const auto* first = static_cast<const std::byte*>(data);
-        bytes.insert(bytes.end(), first, first + size);
-    }
 };
 
-class Unpacker {
+class Unpacker : public detail::ByteReader {
 public:
-    explicit Unpacker(const std::vector<std::byte>& bytes) : bytes_(bytes) {}
-    template <class T>
-    T get() {
-        T value;
-        need(sizeof(T));
-        std::memcpy(&value, bytes_.data() + at_, sizeof(T));
-        at_ += sizeof(T);
-        return value;
-    }
-    template <class T>
-    std::vector<T> get_array() {
-        const auto n = get<std::uint64_t>();
-        need(n * sizeof(T));
-        std::vector<T> values(n);
-        // An empty vector's data() may be null, which memcpy must not get.
-        if (n > 0) std::memcpy(values.data(), bytes_.data() + at_, n * sizeof(T));
-        at_ += n * sizeof(T);
-        return values;
-    }
+    explicit Unpacker(const std::vector<std::byte>& bytes)
+        : ByteReader(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                     [](const char*) { throw Error("truncated message between MPI ranks"); }) {}
     Piece get_piece() {
         Piece piece;
         piece.x = get_array<float>();
@@ -124,13 +96,6 @@ public:
         const auto chars = get_array<char>();
         return std::string(chars.begin(), chars.end());
     }
-
-private:
-    void need(std::size_t n) const {
-        if (at_ + n > bytes_.size()) throw Error("truncated message between MPI ranks");
-    }
-    const std::vector<std::byte>& bytes_;
-    std::size_t at_ = 0;
 };
 
 void send(const std::vector<std::byte>& bytes, int to, int tag) {
@@ -256,12 +221,13 @@ private:
     int most_ = per_worker_;
 };
 
-// gpu: the GPU this worker drives (-1 for none), made ready before it says
-// it is ready: its first task there then takes what its next ones take.
-void work(const Job& job, int gpu) {
-    if (gpu >= 0) {
+// driven_gpu: the GPU this worker drives (-1 for none), made ready before
+// it says it is ready: its first task there then takes what its next ones
+// take.
+void work(const Job& job, int driven_gpu) {
+    if (driven_gpu >= 0) {
         try {
-            job.prepare_gpu(gpu);
+            job.prepare_gpu(driven_gpu);
         } catch (const std::exception&) {
             // Its tasks there fail with the same error, which rank 0 reports.
         }
@@ -401,20 +367,11 @@ private:
 // itself, as the only process that uses them.
 int driver_count(int workers, int gpus) { return workers >= 2 ? std::min(gpus, workers - 1) : 0; }
 
-// The GPUs a node's tasks may use: every one under --device auto, the one
-// --gpu names under --device gpu.
-std::vector<int> usable_gpus(const JobConfig& config, int count) {
-    std::vector<int> gpus;
-    for (int g = 0; g < count; ++g)
-        if (config.device != JobConfig::Device::gpu || g == config.gpu) gpus.push_back(g);
-    return gpus;
-}
-
 // Which node each rank is on, each node's GPUs and which rank drives each:
 // ranks that share memory (MPI_COMM_TYPE_SHARED) are a node, named by its
 // lowest rank, and its lowest worker ranks drive its GPUs. A node's GPUs are
-// counted, and their memory taken, on every rank there; the smallest answer
-// stands, in case ranks see different devices. Every rank learns the GPU it
+// counted, and the first usable one's memory taken, on every rank there;
+// the smallest answer stands, in case ranks see different devices. Every rank learns the GPU it
 // drives; rank 0 learns the whole layout.
 struct NodeLayout {
     int my_gpu = -1;                     // the GPU this rank drives, -1 for none
@@ -422,7 +379,7 @@ struct NodeLayout {
     std::vector<int> driving;            // by rank: the GPU it drives, -1 for none
     std::vector<int> workers;            // by node: its worker ranks (rank 0 is none)
     std::vector<std::vector<int>> gpus;  // by node: the GPUs its resource manager places tasks on
-    std::vector<double> gpu_mib;         // by node: the smallest GPU's memory
+    std::vector<double> gpu_mib;         // by node: its first usable GPU's memory
 };
 
 NodeLayout node_layout(int rank, int ranks, const JobConfig& config) {
@@ -435,7 +392,7 @@ NodeLayout node_layout(int rank, int ranks, const JobConfig& config) {
     const int seen = gpu_count();
     int count = 0;
     MPI_Allreduce(&seen, &count, 1, MPI_INT, MPI_MIN, local);
-    const std::vector<int> usable = usable_gpus(config, count);
+    const std::vector<int> usable = NodePlacement::usable_gpus(config, count);
     const int seen_mib = usable.empty() ? 0 : static_cast<int>(gpu_memory_mib(usable.front()));
     int mib = 0;
     MPI_Allreduce(&seen_mib, &mib, 1, MPI_INT, MPI_MIN, local);
@@ -475,7 +432,7 @@ NodeLayout node_layout(int rank, int ranks, const JobConfig& config) {
     // on them), or, for a lone worker, to every usable GPU, which it runs
     // itself.
     for (std::size_t node = 0; node < layout.workers.size(); ++node)
-        layout.gpus.push_back(layout.workers[node] == 1 ? usable_gpus(config, gpu_count_of[node]) : driven[node]);
+        layout.gpus.push_back(layout.workers[node] == 1 ? NodePlacement::usable_gpus(config, gpu_count_of[node]) : driven[node]);
     return layout;
 }
 
@@ -575,9 +532,9 @@ private:
     // and answers nobody. That is always so for the root, and, because the
     // queue finishes subtrees early, in practice for every seam after the
     // last domain task. Run here, such a seam skips packing both pieces,
-    // the worker's unpacking, and the same again for its result. And the
-    // root seam, which holds the
-    // whole surface several times, no longer lands on a worker. A looser rule,
+    // the worker's unpacking, and the same again for its result; and the
+    // root seam, which holds the whole surface several times, takes no
+    // worker's memory. A looser rule,
     // with seams of other subtrees still in flight, could keep a finished
     // worker's result and the parent it readies waiting for rank 0.
     bool should_run_here() const {
@@ -588,8 +545,9 @@ private:
     // Such a seam runs on the cores of rank 0 and of every worker, which are
     // all idle then and wait without spinning (wait_for_message): one thread
     // per rank's share, on the union of the ranks' bindings. Threads do not
-    // change the result. The job's last seams, mostly their reduction near
-    // the seam, were 1.7 s of a 25.9 s job at 15 workers, with 15 cores idle.
+    // change the result. Otherwise the job's last seams, mostly their
+    // reduction near the seam, would run on one rank's cores with the others
+    // idle.
     void execute_here() {
         const int task = queue_.pop();
         const TaskNode& n = job_.node(task);
@@ -829,10 +787,7 @@ private:
         record.start = std::max(0.0, record.end - duration);
         if (const auto it = placed_.find(worker); it != placed_.end()) {
             const Placed& p = it->second;
-            const double transfer = record.stages.upload + record.stages.download;
-            placements_[static_cast<std::size_t>(p.node)].manager.finish(p.grant.ticket, std::max(0.0, duration - transfer),
-                                                                         transfer);
-            record.predicted_seconds = p.grant.predicted_seconds;
+            placements_[static_cast<std::size_t>(p.node)].finish(p.grant, duration, record);
             record.wait_seconds = p.sent_at - p.asked_at;
             placed_.erase(it);
         }

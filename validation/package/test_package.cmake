@@ -28,7 +28,8 @@ execute_process(COMMAND ${CMAKE_COMMAND} -S ${CMAKE_CURRENT_LIST_DIR} -B ${build
                         -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF -DCHECK_INSTALLED_HEADERS=ON
                         COMMAND_ERROR_IS_FATAL ANY)
 file(STRINGS ${build}/CMakeCache.txt found REGEX "^tetiso_DIR:")
-if(NOT found MATCHES "=${prefix}/")
+string(FIND "${found}" "=${prefix}/" at)
+if(at EQUAL -1)
   message(FATAL_ERROR "the program found another tetiso package: ${found}")
 endif()
 

@@ -865,7 +865,7 @@ TEST_P(ChoosingByReservations, GivesTheSweepsBytes) {
     // Speculation tests every operation of a round first: the window and the
     // thread count change nothing more.
     o.threads = 2;
-    for (const long window : {5L, 1L << 30})
+    for (const long window : {5L, 0L, 1L << 30})
         EXPECT_TRUE(identical(swept, detail::reduce_by_reservations(in, o, window, true)))
             << "window " << window << ", speculating";
 }

@@ -279,7 +279,7 @@ TEST(NodePlacement, DevicesAndRequestsOfAJob) {
 
     // A GPU whose memory, less the context, cannot hold the domain's
     // estimate: the domain stays on the CPU, or under --device gpu is refused.
-    const double small = (kGpuContextMiB + kGpuTaskMarginMiB) / 0.95;
+    const double small = (kGpuContextMiB + kGpuTaskMarginMiB) / kGpuUsableShare;
     EXPECT_EQ(NodePlacement(job, 3, {0}, small).request(domain_task, nullptr, nullptr).units,
               (std::vector<double>{1, 0}));
     const NodePlacement gpu_only(job, 3, {0}, 16000.0, false);

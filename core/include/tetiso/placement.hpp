@@ -13,7 +13,6 @@
 // estimate does not fit the GPU may only run on the CPU.
 #pragma once
 
-#include <string>
 #include <vector>
 
 #include "tetiso/resources.hpp"
@@ -30,6 +29,9 @@ inline constexpr double kGpuTaskMarginMiB = 64;
 // Device memory the driving process's CUDA context keeps, not available to
 // tasks.
 inline constexpr double kGpuContextMiB = 512;
+// The share of a GPU's memory a task may plan on: the rest is left to the
+// driver and to other users of the device.
+inline constexpr double kGpuUsableShare = 0.95;
 
 // The memory of CUDA device `gpu` in MiB, from gpu_info(); 0 where unknown.
 double gpu_memory_mib(int gpu);
@@ -38,7 +40,7 @@ class NodePlacement {
 public:
     // `cpu_processes`: the node's processes that run tasks on the CPU, its
     // CPU capacity (at least 1); `gpus`: the CUDA indices of the GPUs the
-    // node's tasks may use, of `gpu_mib` each (the smallest of the node's);
+    // node's tasks may use, of `gpu_mib` each (the first usable one's);
     // `domains_on_cpu`: false under --device gpu, where domain tasks run on
     // a GPU only (seams always run on the CPU).
     NodePlacement(const Job& job, int cpu_processes, const std::vector<int>& gpus, double gpu_mib,
@@ -48,6 +50,16 @@ public:
     // any GPU whose memory holds it; a seam one CPU process. Throws
     // tetiso::Error when a domain may run on a GPU only and fits none.
     ResourceRequest request(int task, const Piece* left, const Piece* right) const;
+
+    // Tells the manager that the task of `grant` ended: it took `seconds` in
+    // all, of which the record's upload and download were transfer, which the
+    // manager learns apart from the device's time. The record gets the
+    // grant's prediction.
+    void finish(const Grant& grant, double seconds, TaskRecord& record);
+
+    // The GPUs a node's tasks may use, of the `count` it has: every one
+    // under --device auto, the one --gpu names under --device gpu.
+    static std::vector<int> usable_gpus(const JobConfig& config, int count);
 
     // The CUDA index of a manager's device, -1 for the CPU.
     int gpu_of(int device) const { return manager.devices()[static_cast<std::size_t>(device)].gpu; }

@@ -57,7 +57,7 @@ private:
 struct ManagedDevice {
     std::string name;    // "cpu", "gpu 0", ...
     int gpu = -1;        // the CUDA index, -1 for the CPU
-    double capacity = 1; // units: processes for the CPU, MiB for a GPU
+    double capacity = 1; // units: processes for the CPU, task slots for a GPU
     // Seconds to move one unit of a task's size to the device and its result
     // back, added to the model's τ (StarPU's dmda counts transfers the same
     // way): the value to assume until a task has finished there, after which
