@@ -24,10 +24,14 @@ machine="$(nproc) cores ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | s
 for log in build-fuzz/logs/*.log; do
     reader=$(basename "$log" .log)
     [ $# -eq 0 ] || [[ " $* " == *" $reader "* ]] || continue
-    python3 - "$log" "$reader" "$runs" "$commit" "$started" "$seconds" "$machine" "clang $(clang++ -dumpversion)" \
+    # A log this campaign did not write (fuzz.sh stopped before the reader)
+    # is an earlier run's, not this one's.
+    [ "$(stat -c %Y "$log")" -ge "$start" ] || continue
+    python3 - "$log" "$reader" "$runs $*" "$commit" "$started" "$seconds" "$machine" "clang $(clang++ -dumpversion)" \
         "$(find build-fuzz/corpus/"$reader" -type f | wc -l)" <<'PY' >"results/fuzz/$reader.json"
 import json, re, sys
-log, reader, runs, commit, started, seconds, machine, compiler, corpus = sys.argv[1:]
+log, reader, arguments, commit, started, seconds, machine, compiler, corpus = sys.argv[1:]
+runs = arguments.split()[0]
 text = open(log, errors="replace").read()
 last = lambda pattern: (re.findall(pattern, text) or [None])[-1]
 finding = re.search(r"(ERROR: |runtime error|uncaught|deadly signal).{0,110}", text)
@@ -36,7 +40,7 @@ print(json.dumps({
     "exec_per_s": int(last(r"stat::average_exec_per_sec: *(\d+)") or 0),
     "coverage_edges": int(last(r"cov: (\d+)") or 0), "features": int(last(r"ft: (\d+)") or 0),
     "corpus_entries": int(corpus), "finding": finding.group(0) if finding else None,
-    "command": f"scripts/fuzz_campaign.sh {runs} (scripts/fuzz.sh --runs {runs})", "commit": commit,
+    "command": f"scripts/fuzz_campaign.sh {arguments.strip()} (scripts/fuzz.sh --runs {runs})", "commit": commit,
     "started": started, "campaign_seconds": int(seconds), "machine": machine, "compiler": compiler,
     "build": "every target and tetiso_core with AddressSanitizer and UndefinedBehaviorSanitizer, -O1 -g"}, indent=1))
 PY

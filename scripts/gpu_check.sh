@@ -22,7 +22,7 @@
 #                                     bench() below), under OUT
 #   scripts/gpu_check.sh jobs OUT COMMIT DEADLINE_S N:D...
 #                                     there: the jobs of
-#                                     results/hardware-comparison.md (see
+#                                     results/hardware-comparison/README.md (see
 #                                     jobs() below), under OUT
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -119,7 +119,7 @@ bench() {
     grep -E "median|byte for byte|DIFFERS" "$out/bench.log"
 }
 
-# What results/hardware-comparison.md is made from, there: for each case
+# What results/hardware-comparison/README.md is made from, there: for each case
 # N:D, the job `tetiso run --lattice N --domains D` on every core of the
 # machine (one rank per core, rank 0 the controller), once with --device cpu
 # and once with --device auto, each with its report and wall time, the two

@@ -11,8 +11,8 @@
 #
 #   scripts/paper_reproduction.sh OUTDIR BUDGET_S [POINTS]
 #   scripts/paper_reproduction.sh out/call1 550 250:1,250:2,250:15,125:15,63:15
-#   EXTRAS=check scripts/paper_reproduction.sh out/call2 550 125:1,125:4,125:8,250:8,250:4
-#   EXTRAS=check,probe scripts/paper_reproduction.sh out/call3 550 63:1,63:4,63:8
+#   EXTRAS=check scripts/paper_reproduction.sh out/call2 550 125:1,63:1,125:8,63:8
+#   EXTRAS=check,probe scripts/paper_reproduction.sh out/call3 550 63:1,63:4,125:4,250:4
 #
 # POINTS is DOMAINS:WORKERS,... run in that order (default: every series at
 # 1, 2, 4, 8 and 15 workers, far more than one call's budget: give the part

@@ -4,7 +4,7 @@ box of the reduced and of the unreduced surface side by side with their
 edges (the paper's Fig. 10), and one view of the whole reduced surface.
 
     xvfb-run -a -s "-screen 0 1600x1200x24" scripts/render_surface.py REDUCED.ply RAW.ply \\
-        --box 1.8,1.8,1.8,2.3,2.3,2.3 --job-reduced "CMD" --job-raw "CMD" --out results/paper-reproduction
+        --box 1.8,1.8,1.8,2.3,2.3,2.3 --domains 125 --job-reduced "CMD" --job-raw "CMD" --out results/paper-reproduction
 
 REDUCED and RAW are binary PLY files written by `tetiso run` (RAW with
 --no-reduce) for the same problem. Both fragments are drawn cut at the box's

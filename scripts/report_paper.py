@@ -193,7 +193,7 @@ def speedup_rows(runs):
             for domains, p, reports, seconds, t1 in points(runs)]
 
 
-def section_speedup(rows, meta, out, have_plot):
+def section_speedup(rows, out, have_plot):
     lines = ["## Speed-up", ""]
     if have_plot:
         lines += [f"![speed-up against working MPI processes]({out.name}/speedup.png)", ""]
@@ -276,7 +276,7 @@ def section_triangles(rows, checks):
     return lines
 
 
-def section_limits(rows, stream, contention, meta, have_plot, summary, out):
+def section_limits(rows, stream, contention, have_plot, summary, out):
     lines = ["## What limits the speed-up", "",
              "The paper puts its lost speed-up down to memory bandwidth: the more processes run, the more "
              "they load the memory subsystem. Efficiency E = T(1)/(P·T(P)) splits into two factors: how much "
@@ -416,15 +416,14 @@ def section_provenance(meta, out):
               "rank beside the P working ones", f"- Commit: {meta['commit']}", f"- Date: {dates(meta)}", ""]
     if (out / "machine.txt").exists():
         lines += [f"{out.name}/machine.txt holds the machine's lscpu, memory, kernel and MPI version.", ""]
-    lines += ["To measure again (a device machine with 16 cores; split the points over calls that fit its "
-              "time limit) and rewrite this page:", "", "```",
-              "TETISO_BIN=build/core/tetiso scripts/paper_reproduction.sh out/call1 550 "
-              "250:1,250:2,250:15,125:15,63:15",
-              "TETISO_BIN=build/core/tetiso EXTRAS=check scripts/paper_reproduction.sh out/call2 550 "
-              "125:1,125:4,125:8,250:8,250:4",
-              "TETISO_BIN=build/core/tetiso EXTRAS=check,probe scripts/paper_reproduction.sh out/call3 550 "
-              "63:1,63:4,63:8",
-              "scripts/report_paper.py out/call1 out/call2 out/call3", "```", ""]
+    # The same points as the calls above, one call each, with the checks.
+    calls = [re.search(r"--points (\S+)", source["command"]) for source in meta.get("sources", [meta])]
+    calls = [m.group(1) for m in calls if m]
+    lines += ["To measure the same points again (a device machine with 16 cores, one call each) and rewrite "
+              "this page:", "", "```"]
+    lines += [f"TETISO_BIN=build/core/tetiso EXTRAS=check scripts/paper_reproduction.sh out/call{i} 550 {points}"
+              for i, points in enumerate(calls, 1)]
+    lines += ["scripts/report_paper.py " + " ".join(f"out/call{i}" for i in range(1, len(calls) + 1)), "```", ""]
     return lines
 
 
@@ -481,7 +480,7 @@ def main():
     summary.append(f"Reduction: {first['raw_triangles']:,} raw triangles → "
                    + ", ".join(f"{r['report']['triangles']:,} ({r['domains']} domains)"
                                for r in rows if r is next(x for x in rows if x["domains"] == r["domains"])) + ".")
-    limits = section_limits(plotted, stream, contention, meta, have_plot and bool(stream), summary, out)
+    limits = section_limits(plotted, stream, contention, have_plot and bool(stream), summary, out)
     sound = [c for c in checks.values()] + ([load(out, "render-check.json")] if load(out, "render-check.json") else [])
     if sound:
         ok = all(c["topology"]["manifold"] and c["topology"]["oriented"] and not c["topology"]["degenerate_triangles"]
@@ -490,7 +489,7 @@ def main():
                        + ("all manifold, consistently oriented, without degenerate triangles." if ok else
                           "**some unsound: see the table.**"))
     lines += ["## Summary", ""] + [f"- {item}" for item in summary] + [""]
-    lines += section_speedup(rows, meta, out, have_plot)
+    lines += section_speedup(rows, out, have_plot)
     lines += section_stages(rows)
     lines += section_triangles(rows, checks)
     lines += limits
