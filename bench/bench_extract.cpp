@@ -23,7 +23,7 @@
 //
 // Usage: bench_extract [--sizes=100,200] [Google Benchmark flags]
 // Without flags it runs 5 repetitions and reports their aggregates only
-// (mean, median, stddev, cv, min); scripts/report_extract.py reads them.
+// (mean, median, stddev, cv, min); tools/render_results.py reads them.
 #include <benchmark/benchmark.h>
 
 #include <cstdint>

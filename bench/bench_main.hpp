@@ -1,8 +1,8 @@
 // The command line and case registration that bench_extract and bench_reduce
-// share. Their reports (scripts/report_*.py, through bench_report_common.py)
-// read the same aggregates under the same names, so the defaults, the "min"
-// statistic and the timing mode must not drift apart between the programs;
-// keeping them here is what holds them together. Header-only: each program
+// share. Their pages (tools/render_results.py) read the same aggregates under
+// the same names, so the defaults, the "min" statistic and the timing mode
+// must not drift apart between the programs; keeping them here is what holds
+// them together. Header-only: each program
 // is one translation unit and this is no part of tetiso's library.
 #pragma once
 

@@ -14,7 +14,7 @@ packages=(
   libcgal-dev libeigen3-dev                          # checker's self-intersections; CGAL's simplifier baseline
   libmeshoptimizer-dev                               # reduction baseline
   tetgen libmetis-dev                                # meshes/make_meshes.sh; splitting them into domains
-  clang                                              # libFuzzer targets of the readers (scripts/fuzz.sh)
+  clang                                              # libFuzzer targets of the readers (tools/fuzz.sh)
   python3-dolfinx python3-gmsh gmsh                  # the worked example (FEniCSx solver) and meshes/solver fixtures
 )
 # Optional baselines, built and tested only where installed (their tests are

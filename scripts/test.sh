@@ -5,7 +5,7 @@
 # test that made it. The optimised build is what users run; the sanitised one
 # catches what does not throw (an out-of-bounds read on a damaged file, a
 # float cast that overflows) but runs too slowly for timing. Last, each
-# reader's fuzz target runs for 20 s (scripts/fuzz.sh).
+# reader's fuzz target runs for 20 s (tools/fuzz.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install.sh
@@ -19,5 +19,5 @@ cmake --build build-sanitize -j "$(nproc)"
 ctest --test-dir build-sanitize --output-on-failure -j "$(nproc)" --timeout 1200
 
 # Every reader under libFuzzer for a short fixed time, after replaying the
-# inputs that once failed (the recorded campaign is scripts/fuzz_campaign.sh).
-./scripts/fuzz.sh --seconds 20
+# inputs that once failed (the recorded campaign is tools/fuzz_campaign.sh).
+./tools/fuzz.sh --seconds 20

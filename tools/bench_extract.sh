@@ -5,9 +5,9 @@
 #                       lattices, aggregates of several repetitions
 #   memory.jsonl        peak resident memory, one fresh process per line
 #   meta.json           command, machine, commit
-#   README.md           the report, by scripts/report_extract.py
+#   README.md           the page, by tools/render_results.py extract
 #
-# Usage: scripts/bench_extract.sh [--commit REV] [-- bench_extract flags...]
+# Usage: tools/bench_extract.sh [--commit REV] [-- bench_extract flags...]
 #   --commit REV  measure the committed tree REV (exported with git archive
 #                 into the build directory) instead of the working tree, so
 #                 that the report names exactly what was measured even while
@@ -23,7 +23,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
-source "$root/scripts/bench_common.sh"
+source "$root/tools/bench_common.sh"
 
 bench_parse_args "$@"
 
@@ -84,5 +84,5 @@ with open(sys.argv[1], "w") as f:
     f.write("\n")
 EOF
 
-python3 "$root/scripts/report_extract.py" "$out"
+/usr/bin/python3 "$root/tools/render_results.py" extract
 echo "wrote $out/README.md"

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Writes a 10^6-node piece as ParaView writes large ones by default
 (appended raw binary, UInt64 headers, Int64 connectivity and offsets,
-Float64 points and field; --zlib: compressed) for scripts/bench_read_vtu.sh.
+Float64 points and field; --zlib: compressed) for tools/bench_read_vtu.sh.
 
 Usage: bench_read_vtu.py OUT.vtu [N] [--zlib]   (N^3 nodes, default 100)
 """

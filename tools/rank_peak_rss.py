@@ -3,7 +3,7 @@
 and peak resident memory (the kernel's ru_maxrss of that one child, in KiB)
 to the file named by $TETISO_RSS_LOG. Exits with the command's status.
 
-    TETISO_RSS_LOG=rss.jsonl mpirun -np 16 scripts/rank_peak_rss.py build/core/tetiso run ...
+    TETISO_RSS_LOG=rss.jsonl mpirun -np 16 tools/rank_peak_rss.py build/core/tetiso run ...
 
 A wrapper rather than /usr/bin/time because GNU time is not installed
 everywhere (the device machines lack it) and its output would interleave with

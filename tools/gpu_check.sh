@@ -3,24 +3,24 @@
 # registry (the lent device machines: Ubuntu 24.04, CUDA 13, Open MPI, no
 # muparser, METIS, meshoptimizer or Debian's Google Benchmark). Two steps:
 #
-#   scripts/gpu_check.sh prepare      here (Debian 12, nvcc): build Release for
+#   tools/gpu_check.sh prepare      here (Debian 12, nvcc): build Release for
 #                                     sm_90 in build-gpu/ and gather the GPU
 #                                     test programs, bench_reduce_gpu, tetiso
 #                                     and the shared libraries the device
 #                                     lacks into .carry/gpu.tar.xz (carry
 #                                     .carry)
-#   scripts/gpu_check.sh run OUT [quick]
+#   tools/gpu_check.sh run OUT [quick]
 #                                     there: every gpu-labelled test (the CPU
 #                                     reduction suite run on the GPU too, the
 #                                     domain pipeline, the extraction, the
 #                                     command line with cmp), then
 #                                     bench_reduce_gpu; logs and the benchmark's
 #                                     JSON under OUT. quick: the tests only.
-#   scripts/gpu_check.sh bench OUT [COMMIT]
+#   tools/gpu_check.sh bench OUT [COMMIT]
 #                                     there: the tests, then what
 #                                     results/reduce-gpu/ is made from (see
 #                                     bench() below), under OUT
-#   scripts/gpu_check.sh jobs OUT COMMIT DEADLINE_S N:D...
+#   tools/gpu_check.sh jobs OUT COMMIT DEADLINE_S N:D...
 #                                     there: the jobs of
 #                                     results/hardware-comparison/README.md (see
 #                                     jobs() below), under OUT
@@ -95,8 +95,9 @@ run() {
 # GPU, one and every CPU thread, meshoptimizer, the domain task, the device's
 # copy bandwidth), the N = 100 reduction's rounds and, apart, its time by
 # call site (TETISO_GPU_PROFILE waits for the device around every primitive,
-# so its seconds add up to more than the plain run's); then, here,
-# scripts/report_reduce_gpu.py OUT writes the report from OUT.
+# so its seconds add up to more than the plain run's); then, here, OUT's
+# files are copied into results/reduce-gpu/ and tools/render_results.py
+# reduce-gpu writes the page.
 bench() {
     local out=$1 commit=${2:-unknown}
     run "$out" quick || return 1
@@ -111,9 +112,9 @@ bench() {
         --report "$out/rounds_n100.json")
     "$bin/${reduce[0]}" "${reduce[@]:1}" >/dev/null
     TETISO_GPU_PROFILE=1 "$bin/tetiso" "${reduce[@]:1:8}" --report /tmp/tetiso-profiled.json 2>"$out/profile_n100.txt" >/dev/null
-    python3 "$root/scripts/bench_report_common.py" meta "$out/meta.json" \
-        "bench_cmd=${cmd[*]}" "reduce_cmd=${reduce[*]}" "script_cmd=scripts/gpu_check.sh bench OUT $commit" \
-        "commit=$commit" "source_state=Release build for sm_90 of commit $commit, made by scripts/gpu_check.sh prepare" \
+    python3 "$root/tools/bench_meta.py" "$out/meta.json" \
+        "bench_cmd=${cmd[*]}" "reduce_cmd=${reduce[*]}" "script_cmd=tools/gpu_check.sh bench OUT $commit" \
+        "commit=$commit" "source_state=Release build for sm_90 of commit $commit, made by tools/gpu_check.sh prepare" \
         "gpu=$(nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader)" \
         "environment=OMP_WAIT_POLICY=passive" "load_before=$load_before" "load_after=$(cut -d' ' -f1-3 /proc/loadavg)"
     grep -E "median|byte for byte|DIFFERS" "$out/bench.log"
@@ -127,7 +128,8 @@ bench() {
 # could not end before DEADLINE_S seconds from the start (judged by the
 # job before it, scaled by the number of nodes, N^3) is skipped, so the lent
 # machine's time limit is never hit mid-job. Then, here,
-# scripts/report_hardware.py OUT... writes the report.
+# tools/collect_results.py hardware OUT takes them into
+# results/hardware-comparison/ and renders its page.
 jobs() {
     local out=$1 commit=$2 deadline=$3
     shift 3
@@ -142,9 +144,9 @@ jobs() {
     ranks=$(nproc)
     local started=$SECONDS last=0 last_n=1 failed=0
     local -a launch=(mpirun --bind-to core -np "$ranks")
-    python3 "$root/scripts/bench_report_common.py" meta "$out/meta.json" \
-        "script_cmd=scripts/gpu_check.sh jobs OUT $commit $deadline $*" "commit=$commit" \
-        "source_state=Release build for sm_90 of commit $commit, made by scripts/gpu_check.sh prepare" \
+    python3 "$root/tools/bench_meta.py" "$out/meta.json" \
+        "script_cmd=tools/gpu_check.sh jobs OUT $commit $deadline $*" "commit=$commit" \
+        "source_state=Release build for sm_90 of commit $commit, made by tools/gpu_check.sh prepare" \
         "gpu=$(nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader | paste -sd';')" \
         "launcher=${launch[*]}" "environment=OMP_WAIT_POLICY=passive" "load_before=$(cut -d' ' -f1-3 /proc/loadavg)"
     for case in "$@"; do
@@ -187,7 +189,7 @@ jobs) jobs "${2:?usage: gpu_check.sh jobs OUT COMMIT DEADLINE_S N:D...}" "${3:?}
 run) run "${2:?usage: gpu_check.sh run OUT [quick]}" "${3:-}" ;;
 bench) bench "${2:?usage: gpu_check.sh bench OUT [COMMIT]}" "${3:-}" ;;
 *)
-    echo "usage: scripts/gpu_check.sh prepare | run OUT [quick] | bench OUT [COMMIT] | jobs OUT COMMIT DEADLINE_S N:D..." >&2
+    echo "usage: tools/gpu_check.sh prepare | run OUT [quick] | bench OUT [COMMIT] | jobs OUT COMMIT DEADLINE_S N:D..." >&2
     exit 2
     ;;
 esac

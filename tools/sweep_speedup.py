@@ -6,7 +6,7 @@ Fig. 11. Writes NAME.csv (one row per series and worker count), NAME.png
 (command, machine, commit, and every run's report with each rank's peak
 memory).
 
-    scripts/sweep_speedup.py --lattice 100 --workers 1,2 --out out/local
+    tools/sweep_speedup.py --lattice 100 --workers 1,2 --out out/local
 
 P workers run as `mpirun -np P+1` (rank 0 controls and holds the pieces, the
 P others run tasks). Each point is the median of --repeat runs of the job's
@@ -15,7 +15,7 @@ without MPI start-up and without writing the surface). Speed-up is T(1)/T(P)
 within a series, efficiency is speed-up / P. The CSV also gives the median of
 seconds.total (MPI start-up and writing the surface included) and the wall
 time of the whole mpirun, and the largest peak resident memory of any worker
-and of rank 0 (each rank runs under scripts/rank_peak_rss.py).
+and of rank 0 (each rank runs under tools/rank_peak_rss.py).
 
 A long sweep can be split over several calls (a lent machine runs one
 command for at most minutes): --points runs chosen (domains:workers) pairs,
@@ -25,8 +25,8 @@ first of a sweep, always starts), a failed run drops the rest of its series
 (the output, and so the failure, does not depend on the worker count), and
 --merge combines the runs of earlier NAME.json files into one table and plot:
 
-    scripts/sweep_speedup.py --lattice 500 --points 125:1,125:15 --deadline 500 --out part1
-    scripts/sweep_speedup.py --merge part1.json part2.json --out out/device
+    tools/sweep_speedup.py --lattice 500 --points 125:1,125:15 --deadline 500 --out part1
+    tools/sweep_speedup.py --merge part1.json part2.json --out out/device
 """
 import argparse
 import csv

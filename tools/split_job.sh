@@ -4,14 +4,14 @@
 # then `run --split`): each rank's peak memory, the wall time, and whether the
 # surfaces are the same bytes. Makes a TetGen mesh of the paper's cube with
 # volume bound VOLUME per tetrahedron and splits it into D domains by METIS.
-# Usage: scripts/split_job.sh [VOLUME=0.00015] [D=32] [NP=3]; outputs in out/split/.
+# Usage: tools/split_job.sh [VOLUME=0.00015] [D=32] [NP=3]; outputs in out/split/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 volume=${1:-0.00015}
 domains=${2:-32}
 ranks=${3:-3}
 tetiso=$(realpath "${TETISO:-build/core/tetiso}")
-rss=$(realpath scripts/rank_peak_rss.py)
+rss=$(realpath tools/rank_peak_rss.py)
 work=out/split
 rm -rf "$work"
 mkdir -p "$work"

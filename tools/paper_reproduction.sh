@@ -6,13 +6,14 @@
 # report needs to say what limits the speed-up: the machine's memory bandwidth
 # (bench/bench_stream.cpp at 1 ... all threads) and, where perf can count them
 # here, the job's last-level-cache misses; and the topology of every series'
-# final surface (`tetiso check`). scripts/report_paper.py turns one or more
-# OUTDIRs into results/paper-reproduction/ and results/paper-reproduction.md.
+# final surface (`tetiso check`). tools/collect_results.py paper takes one or
+# more OUTDIRs into results/paper-reproduction/ and renders
+# results/paper-reproduction.md.
 #
-#   scripts/paper_reproduction.sh OUTDIR BUDGET_S [POINTS]
-#   scripts/paper_reproduction.sh out/call1 550 250:1,250:2,250:15,125:15,63:15
-#   EXTRAS=check scripts/paper_reproduction.sh out/call2 550 125:1,63:1,125:8,63:8
-#   EXTRAS=check,probe scripts/paper_reproduction.sh out/call3 550 63:1,63:4,125:4,250:4
+#   tools/paper_reproduction.sh OUTDIR BUDGET_S [POINTS]
+#   tools/paper_reproduction.sh out/call1 550 250:1,250:2,250:15,125:15,63:15
+#   EXTRAS=check tools/paper_reproduction.sh out/call2 550 125:1,63:1,125:8,63:8
+#   EXTRAS=check tools/paper_reproduction.sh out/call3 550 63:1,63:4,125:4,250:4
 #
 # POINTS is DOMAINS:WORKERS,... run in that order (default: every series at
 # 1, 2, 4, 8 and 15 workers, far more than one call's budget: give the part
@@ -31,14 +32,11 @@
 #   STREAM_BIN     an already-built bench_stream (else compiled here with
 #                  c++ -fopenmp, which needs nothing else)
 #   LATTICE        N (default 500)
-#   EXTRAS         which of stream,check,perf,probe to run (default
-#                  stream,check,perf): probe adds scripts/probe_contention.py's
-#                  compute and domain probes on cores 1-15 (about a minute)
+#   EXTRAS         which of stream,check,perf to run (default all three)
 #
 # Writes OUTDIR/machine.txt, OUTDIR/sweep.{json,csv,png} (every run's report,
 # command, machine and commit), OUTDIR/stream.json, OUTDIR/check-dD.json (one
-# per series run here), OUTDIR/perf.txt (whether perf could count),
-# OUTDIR/contention.json with probe. Needs python3 (standard library; the
+# per series run here), OUTDIR/perf.txt (whether perf could count). Needs python3 (standard library; the
 # sweep's plot is drawn only where matplotlib exists), mpirun, lscpu.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -105,10 +103,9 @@ if wants perf; then
   fi
 fi
 
-# Checks and the probe need a few seconds each after the sweep.
+# Checks need a few seconds each after the sweep.
 reserve=20
-wants probe && reserve=$((reserve + 90))
-PYTHONUNBUFFERED=1 python3 scripts/sweep_speedup.py --tetiso "$tetiso" --lattice "$lattice" --bind core \
+PYTHONUNBUFFERED=1 python3 tools/sweep_speedup.py --tetiso "$tetiso" --lattice "$lattice" --bind core \
   --commit "$commit" --points "$points" --deadline "$(($(left) - reserve))" --keep-surfaces "$out" \
   "${perf_args[@]}" --out "$out/sweep" -- --device cpu || echo "sweep failed"
 
@@ -122,8 +119,4 @@ for surface in "$out"/surface-d*.ply; do
   rm -f "$surface"
 done
 
-if wants probe && [[ $(left) -gt 80 ]]; then
-  python3 scripts/probe_contention.py --tetiso "$tetiso" --probes compute,domain --cores 1-15 \
-    --out "$out/contention" || echo "probe failed"
-fi
 echo "done in $(($(date +%s) - start)) s"

@@ -1,7 +1,7 @@
 # shellcheck shell=bash
 # The drivers' variables are read and set here, out of shellcheck's sight.
 # shellcheck disable=SC2034,SC2154
-# Sourced by scripts/bench_extract.sh and scripts/bench_reduce.sh: how a
+# Sourced by tools/bench_extract.sh and tools/bench_reduce.sh: how a
 # benchmark driver takes its arguments, picks and builds the source it
 # measures, runs its program and describes the run. One copy, so that every
 # results/*/meta.json records a run the same way and a fix to the snapshot
@@ -81,7 +81,7 @@ relative() { local text=$*; echo "${text//$root\//}"; }
 
 # The driver's command line as the report prints it, to rerun the same way.
 bench_script_cmd() {
-  echo "scripts/${0##*/}${commit_rev:+ --commit $commit_rev}${bench_flags[*]:+ -- ${bench_flags[*]}}"
+  echo "tools/${0##*/}${commit_rev:+ --commit $commit_rev}${bench_flags[*]:+ -- ${bench_flags[*]}}"
 }
 
 # The environment variables that change how the programs' threads behave.

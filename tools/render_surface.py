@@ -3,7 +3,7 @@
 box of the reduced and of the unreduced surface side by side with their
 edges (the paper's Fig. 10), and one view of the whole reduced surface.
 
-    xvfb-run -a -s "-screen 0 1600x1200x24" scripts/render_surface.py REDUCED.ply RAW.ply \\
+    xvfb-run -a -s "-screen 0 1600x1200x24" tools/render_surface.py REDUCED.ply RAW.ply \\
         --box 1.8,1.8,1.8,2.3,2.3,2.3 --domains 125 --job-reduced "CMD" --job-raw "CMD" --out results/paper-reproduction
 
 REDUCED and RAW are binary PLY files written by `tetiso run` (RAW with
@@ -11,7 +11,7 @@ REDUCED and RAW are binary PLY files written by `tetiso run` (RAW with
 faces; the triangle counts are of the whole triangles whose centroid lies in
 the box. Writes OUT/fragment.png, OUT/surface.png and
 OUT/render.json (the box, triangle counts, the jobs' commands, machine,
-commit, date, VTK version), which scripts/report_paper.py cites.
+commit, date, VTK version), which results/paper-reproduction.md cites.
 
 Dependencies: Debian's python3-vtk9 and python3-numpy. Debian's VTK renders
 through X: without a display run it under xvfb-run (package xvfb).
@@ -222,7 +222,7 @@ def main():
     fr, fw = in_box(vr, tr, box), in_box(vw, tw, box)
     lscpu = subprocess.run(["lscpu"], capture_output=True, text=True).stdout
     model = next((l.split(":", 1)[1].strip() for l in lscpu.splitlines() if l.startswith("Model name")), "?")
-    meta = {"command": "scripts/render_surface.py " + " ".join(
+    meta = {"command": "tools/render_surface.py " + " ".join(
                 [os.path.relpath(args.reduced), os.path.relpath(args.raw), "--box", args.box]),
             "jobs": {"reduced": args.job_reduced, "raw": args.job_raw}, "domains": args.domains,
             "box": box, "triangles": {"reduced": len(tr), "raw": len(tw)},

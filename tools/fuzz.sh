@@ -3,7 +3,7 @@
 # with clang, AddressSanitizer and UndefinedBehaviorSanitizer in build-fuzz/,
 # and runs them: all, or the readers named.
 #
-#   scripts/fuzz.sh [--seconds S | --runs N] [READER...]    READER: ply, vtp, tetgen, partition, split, ...
+#   tools/fuzz.sh [--seconds S | --runs N] [READER...]    READER: ply, vtp, tetgen, partition, split, ...
 #
 # Each target first replays its regressions (validation/fuzz/regressions/
 # READER/, inputs that once failed), then fuzzes from its seeds

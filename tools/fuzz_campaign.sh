@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
-# A fuzzing campaign of the readers, recorded: scripts/fuzz.sh with N inputs
+# A fuzzing campaign of the readers, recorded: tools/fuzz.sh with N inputs
 # per reader (default 10^6; all readers, or those named), then one
 # results/fuzz/READER.json per reader run (inputs, rate, coverage, corpus,
 # findings, and the command, commit, date, machine and compiler), and
-# results/fuzz/README.md rewritten by scripts/report_fuzz.py from every
+# results/fuzz/README.md rewritten by tools/render_results.py fuzz from every
 # READER.json there, so a campaign over some readers keeps the others' rows.
 #
-#   scripts/fuzz_campaign.sh [N] [READER...]
+#   tools/fuzz_campaign.sh [N] [READER...]
 set -uo pipefail
 cd "$(dirname "$0")/.." || exit 1
 runs=${1:-1000000}
@@ -14,7 +14,7 @@ shift || true
 started=$(date -u +%Y-%m-%dT%H:%MZ)
 commit=$(git rev-parse --short HEAD)$(git diff --quiet HEAD -- core validation || echo "+changes")
 start=$(date +%s)
-scripts/fuzz.sh --runs "$runs" "$@"
+tools/fuzz.sh --runs "$runs" "$@"
 status=$?
 seconds=$(($(date +%s) - start))
 
@@ -40,11 +40,11 @@ print(json.dumps({
     "exec_per_s": int(last(r"stat::average_exec_per_sec: *(\d+)") or 0),
     "coverage_edges": int(last(r"cov: (\d+)") or 0), "features": int(last(r"ft: (\d+)") or 0),
     "corpus_entries": int(corpus), "finding": finding.group(0) if finding else None,
-    "command": f"scripts/fuzz_campaign.sh {arguments.strip()} (scripts/fuzz.sh --runs {runs})", "commit": commit,
+    "command": f"tools/fuzz_campaign.sh {arguments.strip()} (tools/fuzz.sh --runs {runs})", "commit": commit,
     "started": started, "campaign_seconds": int(seconds), "machine": machine, "compiler": compiler,
     "build": "every target and tetiso_core with AddressSanitizer and UndefinedBehaviorSanitizer, -O1 -g"}, indent=1))
 PY
 done
-python3 scripts/report_fuzz.py results/fuzz
+/usr/bin/python3 tools/render_results.py fuzz
 echo "written: results/fuzz/README.md"
 exit "$status"

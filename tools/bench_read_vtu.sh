@@ -4,10 +4,10 @@
 # Float64 points and field, as ParaView writes large pieces), and the same
 # zlib-compressed: the "read" seconds of `tetiso extract --report` (file to
 # domain: the reader and the orientation check), one thread, REPEATS runs.
-# Usage: scripts/bench_read_vtu.sh [REPEATS]   (writes ~270 MB under $TMPDIR;
+# Usage: tools/bench_read_vtu.sh [REPEATS]   (writes ~270 MB under $TMPDIR;
 # TETISO names the binary, default build/core/tetiso)
 # Writes results/solver-read/runs.json (every run's seconds, the command,
-# machine, commit and date) and the page scripts/report_solver_read.py makes
+# machine, commit and date) and the page tools/render_results.py solver-read makes
 # of it, results/solver-read/README.md.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -18,7 +18,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 load=$(cut -d' ' -f1-3 /proc/loadavg)
 for variant in raw zlib; do
-    /usr/bin/python3 "$root/scripts/bench_read_vtu.py" "$work/piece.vtu" "$lattice" $([ $variant = zlib ] && echo --zlib)
+    /usr/bin/python3 "$root/tools/bench_read_vtu.py" "$work/piece.vtu" "$lattice" $([ $variant = zlib ] && echo --zlib)
     stat -c %s "$work/piece.vtu" >"$work/$variant.bytes"
     for run in $(seq "$repeats"); do
         "$tetiso" extract --mesh "$work/piece.vtu" --array distance --level 1.5 -o "$work/s.ply" \
@@ -41,8 +41,8 @@ for variant, label in labels.items():
     tets = reports[0]["tets"]  # the same mesh in both encodings
     pieces.append({"variant": variant, "label": label, "bytes": int(open(f"{work}/{variant}.bytes").read()),
                    "seconds": [r["seconds"]["read"] for r in reports]})
-json.dump({"command": f"scripts/bench_read_vtu.sh {repeats}", "commit": commit, "machine": machine,
+json.dump({"command": f"tools/bench_read_vtu.sh {repeats}", "commit": commit, "machine": machine,
            "load_before": load, "date": date, "lattice": lattice, "tetrahedra": tets, "repeats": repeats,
            "pieces": pieces}, sys.stdout, indent=1)
 PY
-/usr/bin/python3 "$root/scripts/report_solver_read.py" "$out"
+/usr/bin/python3 "$root/tools/render_results.py" solver-read

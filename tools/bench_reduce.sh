@@ -7,9 +7,9 @@
 #                      where the build has them, 3 runs each), aggregates of
 #                      several repetitions, quality counters
 #   meta.json          command, machine, commit
-#   README.md          the report, by scripts/report_reduce.py
+#   README.md          the page, by tools/render_results.py reduce
 #
-# Usage: scripts/bench_reduce.sh [--commit REV] [-- bench_reduce flags...]
+# Usage: tools/bench_reduce.sh [--commit REV] [-- bench_reduce flags...]
 #   --commit REV  measure the committed tree REV (exported with git archive
 #                 into the build directory) instead of the working tree, so
 #                 that the report names exactly what was measured even while
@@ -24,7 +24,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
-source "$root/scripts/bench_common.sh"
+source "$root/tools/bench_common.sh"
 
 bench_parse_args "$@"
 
@@ -70,7 +70,7 @@ bench_run bench_reduce
 
 libraries=$(dpkg-query -W -f='${Package} ${Version}\n' libmeshoptimizer-dev libcgal-dev libeigen3-dev libopenmesh-dev libbenchmark-dev 2>/dev/null |
   paste -sd, | sed 's/,/, /g' || true)
-python3 "$root/scripts/bench_report_common.py" meta "$out/meta.json" \
+python3 "$root/tools/bench_meta.py" "$out/meta.json" \
   "script_cmd=$(bench_script_cmd)" \
   "bench_cmd=$(relative "${bench_cmd[*]}")" \
   "source_state=$(relative "$source_state")" \
@@ -81,5 +81,5 @@ python3 "$root/scripts/bench_report_common.py" meta "$out/meta.json" \
   "compile_options=$(sed -n 's/^add_compile_options("$<$<COMPILE_LANGUAGE:CXX>:\(.*\)>")$/\1/p' "$source_dir/CMakeLists.txt" |
     head -1 | tr ';' ' ')"
 
-python3 "$root/scripts/report_reduce.py" "$out"
+/usr/bin/python3 "$root/tools/render_results.py" reduce
 echo "wrote $out/README.md"

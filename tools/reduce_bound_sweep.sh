@@ -6,7 +6,7 @@
 # (sampled over the triangles) and the largest distance of the raw surface's
 # vertices, the quantity the bound is on. Writes a Markdown table with the
 # command, machine and commit to OUT (default results/reduce/bound_sweep.md).
-#   scripts/reduce_bound_sweep.sh [N] [OUT]
+#   tools/reduce_bound_sweep.sh [N] [OUT]
 # Environment: FIELDS (default "paper sphere torus gyroid"), BOUNDS (default
 # "0.1 0.25 0.5 0"), TETISO (default build/core/tetiso).
 set -euo pipefail
@@ -52,7 +52,7 @@ done
   echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
   printf '%s\n' "${rows[@]}"
   echo
-  echo "- Command: \`scripts/reduce_bound_sweep.sh $n $out\`"
+  echo "- Command: \`tools/reduce_bound_sweep.sh $n $out\`"
   echo "- Commit: \`$(git rev-parse HEAD)\`$(git diff --quiet HEAD -- core || echo ' (with uncommitted changes in core/)')"
   echo "- Machine: $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) CPUs, $(uname -sr); $(date -u +%FT%TZ)"
 } >"$out.tmp"
