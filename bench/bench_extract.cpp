@@ -52,7 +52,7 @@ constexpr float kLevel = 0.5f;
 // cases can be interleaved (--benchmark_enable_random_interleaving): on a
 // shared machine, a busy spell then slows tetiso and VTK alike instead of
 // whichever case happened to be running. N=100 and N=200 together, with their
-// VTK copies, hold about 3.5 GB.
+// VTK copies, hold several GB.
 struct Problem {
     tetiso::Domain domain;
 #ifdef TETISO_HAVE_VTK
