@@ -4,7 +4,9 @@ written by hand) with its placeholders filled from the folder's JSON files by
 NAME's spec in tools/results_pages.py (which data, which tables and plots,
 which derived figures).
 
-    tools/render_results.py [NAME...]   (default: every page)
+    tools/render_results.py [--results DIR] [NAME...]
+        NAME: a page (default: every page); DIR: a results folder other than
+        the repository's (a copy, say).
 
 A placeholder is {{ expression }} or {{ expression | format }}, a Python
 expression over the names the spec returns, formatted with format() when a
@@ -129,23 +131,25 @@ def save(fig, path, stamp=None, dpi=110):
     plt.close(fig)
 
 
-def render(name):
+def render(name, results=RESULTS):
     import results_pages
     spec, folder, page = results_pages.PAGES[name]
-    folder = RESULTS / folder
-    page = RESULTS / page
-    template = (folder / "page.md").read_text()
-    page.write_text(fill(template, spec(folder), folder / "page.md"))
+    folder, page = results / folder, results / page
+    text = fill((folder / "page.md").read_text(), spec(folder), folder / "page.md")
+    page.write_text(text)
     print(f"wrote {page}")
 
 
-def main(names):
+def main(argv):
     import results_pages
-    unknown = [n for n in names if n not in results_pages.PAGES]
+    results = RESULTS
+    if argv[:1] == ["--results"] and len(argv) > 1:
+        results, argv = Path(argv[1]), argv[2:]
+    unknown = [n for n in argv if n not in results_pages.PAGES]
     if unknown:
         sys.exit(f"render_results.py: no page {', '.join(unknown)} (pages: {', '.join(results_pages.PAGES)})")
-    for name in names or results_pages.PAGES:
-        render(name)
+    for name in argv or results_pages.PAGES:
+        render(name, results)
 
 
 if __name__ == "__main__":
