@@ -144,7 +144,8 @@ def fuzz(folder):
                              "findings", "campaign"],
                             [[r["reader"], f"{r['inputs']:,}", f"{r['exec_per_s']:,}", f"{r['coverage_edges']:,}",
                               f"{r['features']:,}" if r.get("features") else "not recorded",
-                              f"{r['corpus_entries']:,}", r["finding"] or "none", label[r["reader"]]] for r in readers]),
+                              f"{r['corpus_entries']:,}", r["finding"] or "none", label[r["reader"]]]
+                             for r in readers]),
         campaigns=bullets(f"Campaign {label[names[0]]} ({', '.join(names)}): `{command}`; commit {commit}; started "
                           f"{started}; {machine}; {compiler}, {build}"
                           for (command, commit, started, machine, compiler, build), names in campaigns.items()))
@@ -186,8 +187,8 @@ def extract_gpu(folder):
 
     def cell(case, stages=False):
         text = f"{case['time_ms']:,.1f} ({case['min_ms']:,.1f})"
-        return text + (" = " + " / ".join(f"{case['median'][k] * 1e3:.2f}" for k in ("upload_s", "compute_s", "download_s"))
-                       if stages else "")
+        parts = ("upload_s", "compute_s", "download_s")
+        return text + (" = " + " / ".join(f"{case['median'][k] * 1e3:.2f}" for k in parts) if stages else "")
 
     def summary(log):  # a test log's last summary line
         for pattern in (r"\d+% tests passed.*out of \d+", r"\d+ passed, \d+ failed", r"\[  PASSED  \] \d+ tests?"):
@@ -381,7 +382,8 @@ def hardware_comparison(folder):
         meta=meta,
         end_to_end=table(["N", "domains", "cpu s", "auto s", "auto speed-up", "surfaces (cmp)", "target"],
                          [[n, d, f"{job[(n, d), 'cpu']:.1f}", f"**{job[(n, d), 'auto']:.1f}**",
-                           f"{job[(n, d), 'cpu'] / job[(n, d), 'auto']:.2f}×", verdict, HARDWARE_TARGETS.get((n, d), "")]
+                           f"{job[(n, d), 'cpu'] / job[(n, d), 'auto']:.2f}×", verdict,
+                           HARDWARE_TARGETS.get((n, d), "")]
                           for (n, d), (_, verdict) in cases.items()]),
         split=table(["N / domains", "device", "tasks", "domain tasks", "busy s", "GPU busy", "raw triangles",
                      "median domain s", "mean wait s"], split),
@@ -403,7 +405,8 @@ def paper_reproduction(folder):
     data = load(folder, "sweep.json")
     meta = {k: v for k, v in data.items() if k != "runs"}
     sources = meta.get("sources", [meta])
-    stream, render, render_check = load(folder, "stream.json"), load(folder, "render.json"), load(folder, "render-check.json")
+    stream, render = load(folder, "stream.json"), load(folder, "render.json")
+    render_check = load(folder, "render-check.json")
     checks = {int(p.stem[len("check-d"):]): json.loads(p.read_text()) for p in folder.glob("check-d*.json")}
     rows = []
     for domains, p, reports, seconds, t1 in points(data["runs"]):
@@ -427,10 +430,12 @@ def paper_reproduction(folder):
                         f"{r['efficiency']:,.2f}", f"{max(peaks):,.0f}" if peaks else "not recorded"])
         sums, busy = stage_sums(r["report"])
         idle = r["workers"] * r["report"]["seconds"]["job"] - busy
-        stages.append([r["domains"], r["workers"]] + [f"{sums['domain', s]:,.1f}" for s in ("generate", "extract", "reduce")]
-                      + [f"{sum(v for (kind, _), v in sums.items() if kind == 'seam'):,.1f}", f"{busy:,.1f}",
-                         f"{idle:,.1f} ({idle / (busy + idle):.0%})"])
-        r["inflation"], r["utilisation"] = busy / ones[r["domains"]], busy / (r["workers"] * r["report"]["seconds"]["job"])
+        seams = sum(v for (kind, _), v in sums.items() if kind == "seam")
+        stages.append([r["domains"], r["workers"]]
+                      + [f"{sums['domain', s]:,.1f}" for s in ("generate", "extract", "reduce")]
+                      + [f"{seams:,.1f}", f"{busy:,.1f}", f"{idle:,.1f} ({idle / (busy + idle):.0%})"])
+        r["inflation"] = busy / ones[r["domains"]]
+        r["utilisation"] = busy / (r["workers"] * r["report"]["seconds"]["job"])
         if r["workers"] > 1:
             factors.append([r["domains"], r["workers"], f"{r['efficiency']:,.2f}", f"{r['inflation']:.2f}×",
                             f"{r['utilisation']:.0%}"])
@@ -451,7 +456,8 @@ def paper_reproduction(folder):
     near = min(res, key=lambda t: abs(t - p))
     share = res[near]["triad_gb_s"] / near / res[min(res)]["triad_gb_s"]
     if {"LLC-load-misses", "LLC-store-misses"} <= set(report.get("perf", {})):
-        gbs = (report["perf"]["LLC-load-misses"] + report["perf"]["LLC-store-misses"]) * 64 / report["wall_seconds"] / 1e9
+        misses = report["perf"]["LLC-load-misses"] + report["perf"]["LLC-store-misses"]
+        gbs = misses * 64 / report["wall_seconds"] / 1e9
         source = "perf's last-level-cache load and store misses × 64 B over the run's wall time"
     else:  # a domain task builds its domain, piece and reduction state afresh: about a worker's resident set
         peak = statistics.median(report["peak_rss_kib"][1:])
@@ -462,8 +468,8 @@ def paper_reproduction(folder):
     bound = inflation >= 0.75 / share and gbs >= 0.5 * res[near]["triad_gb_s"]
     summary.append(f"Memory bandwidth: {'the limit' if bound else 'not the limit'} at P = {p} (tasks {inflation:.2f}× "
                    f"their one-worker time against {1 / share:.2f}× for a bandwidth-bound kernel; see below).")
-    limit = (f"At P = {p} ({worst['domains']} domains) the tasks take {inflation:.2f}× their time with one worker, and "
-             f"the workers are busy {utilisation:.0%} of the job: efficiency {worst['efficiency']:.2f} ≈ "
+    limit = (f"At P = {p} ({worst['domains']} domains) the tasks take {inflation:.2f}× their time with one worker, "
+             f"and the workers are busy {utilisation:.0%} of the job: efficiency {worst['efficiency']:.2f} ≈ "
              f"{utilisation:.2f} / {inflation:.2f}. A task bound by bandwidth as STREAM's triad is would run "
              f"{1 / share:.2f}× as long with {near} cores streaming at once (each gets {share:.2f} of the bandwidth "
              f"one core gets alone). The job moves about {gbs:.1f} GB/s ({source}) against "
@@ -480,7 +486,8 @@ def paper_reproduction(folder):
     ok = all(c["topology"]["manifold"] and c["topology"]["oriented"] and not c["topology"]["degenerate_triangles"]
              for c in sound)
     summary.append(f"Topology: {len(sound)} surface(s) checked, " + (
-        "all manifold, consistently oriented, without degenerate triangles." if ok else "**some unsound: see the table.**"))
+        "all manifold, consistently oriented, without degenerate triangles." if ok else
+        "**some unsound: see the table.**"))
 
     triangles = []
     for d in series:
@@ -488,8 +495,8 @@ def paper_reproduction(folder):
         raw, tri = reports[0]["raw_triangles"], reports[0]["triangles"]
         same = len({(x["raw_triangles"], x["triangles"]) for x in reports}) == 1
         hashes = {x["surface_sha256"] for x in reports if "surface_sha256" in x}
-        triangles.append([d, f"{raw:,}", f"{tri:,}" + ("" if same else " (differs between runs!)"), f"{raw / tri:.1f}×",
-                          f"{len(hashes)} of {len(reports)} runs" if hashes else "not recorded"])
+        triangles.append([d, f"{raw:,}", f"{tri:,}" + ("" if same else " (differs between runs!)"),
+                          f"{raw / tri:.1f}×", f"{len(hashes)} of {len(reports)} runs" if hashes else "not recorded"])
     check_rows = []
     for d, c in sorted(checks.items(), reverse=True):
         t = c["topology"]
@@ -497,7 +504,8 @@ def paper_reproduction(folder):
                          + ("" if s["orientable"] else ", not orientable") for s in t["signatures"])
         check_rows.append([d, f"{t['triangles']:,}", t["components"],
                            "; ".join(f"{n} × ({text})" if n > 1 else text for text, n in counts.items()),
-                           "yes" if t["manifold"] else "**no**", f"{t['non_manifold_edges']} / {t['non_manifold_vertices']}",
+                           "yes" if t["manifold"] else "**no**",
+                           f"{t['non_manifold_edges']} / {t['non_manifold_vertices']}",
                            "yes" if t["oriented"] else "**no**", t["degenerate_triangles"],
                            f"{t['min_angle_deg']['below_1']:,}", f"{t['min_angle_deg']['min']:.3g}°",
                            "not counted" if c.get("self_intersections") is None else c["self_intersections"]])
@@ -522,7 +530,8 @@ def paper_reproduction(folder):
     for domains, marker in zip(series, "osd^v"):
         ax.plot(*zip(*sorted((r["workers"], r["efficiency"]) for r in rows if r["domains"] == domains)),
                 marker=marker, label=f"job efficiency, {domains} domains")
-    ax.set(xlabel="threads (STREAM) / working MPI processes (job)", ylabel="fraction of the one-core rate", ylim=(0, 1.1))
+    ax.set(xlabel="threads (STREAM) / working MPI processes (job)", ylabel="fraction of the one-core rate",
+           ylim=(0, 1.1))
     ax.grid(alpha=0.3)
     ax.legend(loc="lower left", fontsize=7)
     ax.set_title("Job efficiency against each core's share of memory bandwidth", fontsize=10)
