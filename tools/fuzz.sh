@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer targets (validation/fuzz/fuzz_*.cpp, one per reader)
+# Builds the libFuzzer targets (validation/fuzz/fuzz_*.cpp: one per reader,
+# and `reduce`, which holds reduce() to its contract on any surface read)
 # with clang, AddressSanitizer and UndefinedBehaviorSanitizer in build-fuzz/,
-# and runs them: all, or the readers named.
+# and runs them: all, or the targets named.
 #
-#   tools/fuzz.sh [--seconds S | --runs N] [READER...]    READER: ply, vtp, tetgen, partition, split, ...
+#   tools/fuzz.sh [--seconds S | --runs N] [READER...]    READER: ply, vtp, tetgen, partition, split, reduce, ...
 #
 # Each target first replays its regressions (validation/fuzz/regressions/
 # READER/, inputs that once failed), then fuzzes from its seeds
