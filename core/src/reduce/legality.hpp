@@ -354,9 +354,10 @@ struct Placements {
 // where the samples are placed later, one by one (place_leaf_sample), this
 // takes the bound they start from and the test places none (nor writes the
 // new faces' bound); null to place them here.
-template <class Owns>
-TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsView& ops, i32 i, i32* owner,
-                              const Owns& owns, double* deferred = nullptr) {
+// The tests of a placed collapse that read connectivity alone (the link
+// condition, locked vertices, valences, border loops): cheap, and most
+// collapses that fail, fail here.
+TETISO_HD inline bool connectivity_allows(const RoundView& m, const EdgeSlots& r, const OpsView& ops, i32 i) {
     const i32 u = r.u, w = r.w, c = r.c, d = r.d;
     const bool border_edge = r.f1 < 0 || r.f2 < 0;
     // Link condition.
@@ -383,16 +384,25 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
             const i32 x = m.fans.nbr(gone, j);
             if (x != keep && x != c && x != d && m.s.locked(x)) return false;
         }
-    // Valences, border loops.
+    // Valences, border loops (of 3 edges: both ends' other border
+    // neighbour the same).
     if (nu + nw - 2 - common < ((m.border(u) || m.border(w)) ? 2 : 3)) return false;
     for (const i32 o : {c, d})
         if (o >= 0 && m.fans.nn(o) - 1 < (m.border(o) ? 2 : 3)) return false;
+    return !border_edge || m.border_other(u, w) != m.border_other(w, u);
+}
+
+template <class Owns>
+TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsView& ops, i32 i, i32* owner,
+                              const Owns& owns, double* deferred = nullptr) {
+    const i32 u = r.u, w = r.w;
+    const bool border_edge = r.f1 < 0 || r.f2 < 0;
+    if (!connectivity_allows(m, r, ops, i)) return false;
     const Vec p{ops.px[i], ops.py[i], ops.pz[i]};
     const Vec pu = m.s.pos(u), pw = m.s.pos(w);
     double increment = 0.0;
     if (border_edge) {
         const i32 up = m.border_other(u, w), wn = m.border_other(w, u);
-        if (up == wn) return false; // a border loop of 3 edges
         const Vec a = m.s.pos(up), b = m.s.pos(wn);
         for (const Vec q : {pu, pw})
             increment =
