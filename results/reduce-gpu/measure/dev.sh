@@ -74,7 +74,7 @@ for arg in "$@"; do
     grep -E "median|byte for byte|DIFFERS" /tmp/$name-bench.log
   fi
   if [[ $modes == *timeline* ]]; then
-    timeout 300 ncu --csv --print-units base --kernel-name-base demangled --metrics gpu__time_duration.sum \
+    timeout 300 ncu --csv --print-units base --kernel-name-base demangled ${NCU_TL_FLAGS:-} --metrics gpu__time_duration.sum \
       $b/tetiso $red -o /tmp/x.ply > /tmp/$name-tl.csv 2>/tmp/$name-tl.err || { echo "timeline FAILED"; tail -3 /tmp/$name-tl.err; }
     python3 $here/timeline.py /tmp/$name-tl.csv > $OUT/${name}_timeline.txt 2>&1; tail -8 $OUT/${name}_timeline.txt
   fi
