@@ -313,7 +313,64 @@ def reduce_gpu(folder, n=100):
         domain=table(["", "where", "median ms", "fastest ms", "time / GPU's"],
                      [row("tetiso, GPU", "1 GPU", dgpu, dgpu, False), row("tetiso, CPU", "1 core", dcpu, dgpu, False)]),
         heaviest=table(["ms", "calls", "primitive at"], [[f"{t:.1f}", c, f"`{site}`"] for t, c, site in sites[:10]]),
-        shown=lambda command: re.sub(r"/\S*/(?=[a-z_0-9]+\.json)", "OUT/", command))
+        shown=lambda command: re.sub(r"/\S*/(?=[a-z_0-9]+\.json)", "OUT/", command),
+        **reduce_gpu_before_after(folder, n))
+
+
+NCU_UNITS = {"byte": 1, "Kbyte": 1e3, "Mbyte": 1e6, "Gbyte": 1e9, "ns": 1e-6, "us": 1e-3, "ms": 1, "s": 1e3}
+
+
+def ncu_kernels(path):
+    """The kernels of an Nsight Compute log with the metrics the page compares:
+    a short name, the grid, ms, active threads a warp, local-memory bytes
+    loaded and stored, DRAM bytes."""
+    kernels = []
+    for block in re.split(r"\n(?=  void )", path.read_text())[1:]:
+        head = block.splitlines()[0]
+        template = re.match(r"  void (?:\w+::)*(\w+)<", head)
+        instance = re.search(r"\[lambda\(long\) \(instance (\d+)\)\]", head)
+        grid = re.search(r"\((\d+), 1, 1\)x\(", head)
+        metric = {name: float(value.replace(",", "")) * NCU_UNITS[unit] for name, unit, value in
+                  re.findall(r"^\s+(\S+)\s+(byte|Kbyte|Mbyte|Gbyte|ns|us|ms|s)\s+([\d.,]+)$", block, re.MULTILINE)}
+        ratio = re.search(r"smsp__thread_inst_executed_per_inst_executed\.ratio\s+([\d.]+)", block)
+        kernels.append(dict(
+            name=f"{template[1] if template else '?'}" + (f", lambda {instance[1]}" if instance else ""),
+            grid=int(grid[1]) if grid else 0, ms=metric["gpu__time_duration.sum"],
+            threads=float(ratio[1]), local_ld=metric["l1tex__t_bytes_pipe_lsu_mem_local_op_ld.sum"],
+            local_st=metric["l1tex__t_bytes_pipe_lsu_mem_local_op_st.sum"], dram=metric["dram__bytes.sum"]))
+    return kernels
+
+
+def ncu_table(kernels):
+    def gb(value):
+        return "none" if value == 0 else f"{value / 1e9:.2f}"
+    return table(["kernel", "blocks", "ms", "active threads a warp", "local loads GB", "local stores GB", "DRAM GB"],
+                 [[f"`{k['name']}`", f"{k['grid']:,}", f"{k['ms']:.2f}", f"{k['threads']:.2f}", gb(k["local_ld"]),
+                   gb(k["local_st"]), gb(k["dram"])] for k in kernels])
+
+
+def reduce_gpu_before_after(folder, n):
+    """The commit of the page against the baseline in baseline-*/: the same
+    benchmark cases, the fixed cost of a small round, the dry runs' profile."""
+    base = next(folder.glob("baseline-*"))
+    pattern = r"^(reduce/gpu/N:(\d+)|domain/gpu/N:(\d+)/D:(\d+))(/repeats:\d+)?(/manual_time|/real_time)?$"
+
+    def cases(f):
+        return load_aggregates(f / "bench_reduce_gpu.json", pattern, lambda m: m[1])[1]
+
+    def fixed(f):
+        tail = sorted(r["seconds"] for r in load(f, "rounds_n100.json")["rounds"] if r["candidates"] < 5000)
+        return tail[len(tail) // 2]
+
+    now, before = cases(folder), cases(base)
+    rows = [[f"`{name}`, median ms", f"{before[name]['time_ms']:.1f}", f"{now[name]['time_ms']:.1f}",
+             f"{now[name]['time_ms'] / before[name]['time_ms']:.2f}"] for name in sorted(now) if name in before]
+    rows.append(["a round with < 5,000 candidates (median), ms", f"{fixed(base) * 1e3:.2f}",
+                 f"{fixed(folder) * 1e3:.2f}", f"{fixed(folder) / fixed(base):.2f}"])
+    return dict(baseline=base.name, baseline_commit=base.name.split("-", 1)[1], fixed_before=fixed(base),
+                before_after=table(["", base.name.split("-", 1)[1], "this page", "ratio"], rows),
+                ncu_before=ncu_table(ncu_kernels(base / "ncu_dry_run.txt")),
+                ncu_after=ncu_table(ncu_kernels(folder / "ncu_dry_run.txt")))
 
 
 HARDWARE_TARGETS = {(500, 125): "≤ 2 s with auto, and auto ≥ 10× cpu (one GPU, 16 cores)",

@@ -6,11 +6,15 @@
 //
 // The host reads a scalar back only where a driver needs a size to go on (a
 // count, the new length of a list): each such read waits for the stream.
+// Counts the driver needs only later (a round's statistics, a list's length
+// that a loop of the device reads) stay on the device in a tally, read all
+// at once; stage times are events on the stream, read when the round is over.
 #pragma once
 
 #include <cuda_runtime.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -50,6 +54,17 @@ struct IndexCount {
     Counted counted;
     __host__ __device__ std::int64_t operator()(std::int64_t i) const { return counted(i) ? 1 : 0; }
 };
+
+// for_each_of_kernel for the legality tests: the registers of
+// for_each_heavy_kernel.
+template <class Function>
+__global__ void __launch_bounds__(cuda::kBlock, 3)
+    for_each_of_heavy_kernel(const std::int64_t* n, std::int64_t min_n, Function function) {
+    const std::int64_t count = *n > min_n ? *n : min_n;
+    for (std::int64_t i = blockIdx.x * static_cast<std::int64_t>(blockDim.x) + threadIdx.x; i < count;
+         i += static_cast<std::int64_t>(gridDim.x) * blockDim.x)
+        function(i);
+}
 
 // With TETISO_GPU_PROFILE set, every primitive waits for the device before
 // and after it and adds its seconds to its call site's line of a table,
@@ -105,10 +120,16 @@ public:
         cuda::check(cudaDeviceGetAttribute(&processors, cudaDevAttrMultiProcessorCount, device), "cudaDeviceGetAttribute");
         // 2048 threads a multiprocessor: 8 blocks of kBlock.
         resident_blocks_ = static_cast<unsigned>(std::max(1, processors)) * (2048 / cuda::kBlock);
-        cuda::check(cudaMallocHost(reinterpret_cast<void**>(&pinned_), sizeof(i64) * kScalars), "cudaMallocHost");
+        test_blocks_ = static_cast<unsigned>(std::max(1, processors)) * tests_blocks_per_processor();
+        cuda::check(cudaMallocHost(reinterpret_cast<void**>(&pinned_), sizeof(i64) * (kScalars + kTallySlots)),
+                    "cudaMallocHost");
         scalars_.resize(kScalars);
+        tally_.resize(kTallySlots);
     }
-    ~CudaExec() { cudaFreeHost(pinned_); }
+    ~CudaExec() {
+        for (cudaEvent_t event : marks_) cudaEventDestroy(event);
+        cudaFreeHost(pinned_);
+    }
     CudaExec(const CudaExec&) = delete;
     CudaExec& operator=(const CudaExec&) = delete;
 
@@ -142,7 +163,10 @@ public:
                   int line = __builtin_LINE()) const {
         const Timed timed(*this, "for_each", file, line);
         if (grain != Grain::kTests || n <= 0) return cuda::for_each(stream_, n, function);
-        cuda::for_each_heavy_kernel<<<cuda::blocks_for(n), cuda::kBlock, 0, stream_>>>(n, function);
+        // One wave of blocks, each thread striding: how many stay resident
+        // on a multiprocessor decides how much of the tests' per-thread
+        // scratch (local memory) the caches hold.
+        cuda::for_each_heavy_kernel<<<std::min(cuda::blocks_for(n), test_blocks_), cuda::kBlock, 0, stream_>>>(n, function);
         cuda::check_launch("for_each (tests)");
     }
 
@@ -152,13 +176,18 @@ public:
     // thread striding over the indices: a loop of a few elements costs a
     // small launch whatever max_n is.
     template <class Function>
-    void for_each_of(const i64* n, i64 max_n, const Function& function, Grain = Grain::kCheap, i64 min_n = 0,
+    void for_each_of(const i64* n, i64 max_n, const Function& function, Grain grain = Grain::kCheap, i64 min_n = 0,
                      const char* file = __builtin_FILE(), int line = __builtin_LINE()) const {
         const Timed timed(*this, "for_each_of", file, line);
         const i64 most = std::max(max_n, min_n);
         if (most <= 0) return;
-        const unsigned blocks = std::min<unsigned>(cuda::blocks_for(most), resident_blocks_);
-        cuda::for_each_of_kernel<<<blocks, cuda::kBlock, 0, stream_>>>(n, min_n, function);
+        if (grain == Grain::kTests) {
+            const unsigned blocks = std::min<unsigned>(cuda::blocks_for(most), test_blocks_);
+            cuda_exec::for_each_of_heavy_kernel<<<blocks, cuda::kBlock, 0, stream_>>>(n, min_n, function);
+        } else {
+            const unsigned blocks = std::min<unsigned>(cuda::blocks_for(most), resident_blocks_);
+            cuda::for_each_of_kernel<<<blocks, cuda::kBlock, 0, stream_>>>(n, min_n, function);
+        }
         cuda::check_launch("for_each_of");
     }
 
@@ -236,13 +265,85 @@ public:
 
     i32 exclusive_scan(const Array<i32>& counts, i64 n, Array<i32>& offsets, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
         const Timed timed(*this, "exclusive_scan", file, line);
+        offsets_of(counts, n, offsets);
+        return get(offsets, n);
+    }
+
+    // offsets[i] = counts[0] + ... + counts[i-1] for i <= n, left on the device
+    // (exclusive_scan without reading the sum).
+    void offsets_of(const Array<i32>& counts, i64 n, Array<i32>& offsets) {
         offsets.resize(static_cast<std::size_t>(n) + 1);
         if (n > 0) scan(counts.data(), offsets.data(), n);
         const i32* c = counts.data();
         i32* o = offsets.data();
         cuda::for_each(stream_, 1, [=] __device__(i64) { o[n] = n > 0 ? o[n - 1] + c[n - 1] : 0; });
-        return get(offsets, n);
     }
+
+    // The counts a driver needs only later: count_into and filter_into leave
+    // theirs in a slot of the tally, on the device, for a loop of the device
+    // to read (tally_at, with for_each_of) or for the host to read with the
+    // others in one wait (read_tally).
+    static constexpr int kTallySlots = 8;
+    template <class Counted>
+    void count_into(i64 n, const Counted& counted, int slot, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "count_into", file, line);
+        i64* total = tally_.data() + slot;
+        if (n == 0) return cuda::for_each(stream_, 1, [=] __device__(i64) { *total = 0; });
+        const auto counts = thrust::make_transform_iterator(thrust::counting_iterator<i64>(0),
+                                                            cuda_exec::IndexCount<Counted>{counted});
+        std::size_t bytes = 0;
+        cuda::check(cub::DeviceReduce::Sum(nullptr, bytes, counts, total, n, stream_), "sum");
+        cuda::check(cub::DeviceReduce::Sum(temp(bytes), bytes, counts, total, n, stream_), "counting");
+    }
+    // out[0 .. tally slot) = every i < n with keep(i), ascending (out holds
+    // n entries).
+    template <class Keep>
+    void filter_into(i64 n, const Keep& keep, Array<i32>& out, int slot, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "filter_into", file, line);
+        out.resize(static_cast<std::size_t>(n));
+        i64* count = tally_.data() + slot;
+        if (n == 0) return cuda::for_each(stream_, 1, [=] __device__(i64) { *count = 0; });
+        const thrust::counting_iterator<i64> indices(0);
+        std::size_t bytes = 0;
+        cuda::check(cub::DeviceSelect::If(nullptr, bytes, indices, out.data(), count, n,
+                                          cuda_exec::IndexPredicate<Keep>{keep}, stream_),
+                    "select");
+        cuda::check(cub::DeviceSelect::If(temp(bytes), bytes, indices, out.data(), count, n,
+                                          cuda_exec::IndexPredicate<Keep>{keep}, stream_),
+                    "selecting indices");
+    }
+    const i64* tally_at(int slot) const { return tally_.data() + slot; }
+    std::array<i64, kTallySlots> read_tally(const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "read_tally", file, line);
+        i64* host = pinned_ + kScalars;
+        cuda::check(cudaMemcpyAsync(host, tally_.data(), sizeof(i64) * kTallySlots, cudaMemcpyDeviceToHost, stream_),
+                    "reading the tally");
+        cuda::check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
+        std::array<i64, kTallySlots> values;
+        std::copy(host, host + kTallySlots, values.begin());
+        return values;
+    }
+
+    // Stage times: mark() records an event where the stream has got to;
+    // seconds_between(a, b) waits for b. clear_marks() lets the next marks
+    // reuse the events.
+    int mark() {
+        if (next_mark_ == marks_.size()) {
+            cudaEvent_t event;
+            cuda::check(cudaEventCreate(&event), "cudaEventCreate");
+            marks_.push_back(event);
+        }
+        cuda::check(cudaEventRecord(marks_[next_mark_], stream_), "cudaEventRecord");
+        return static_cast<int>(next_mark_++);
+    }
+    double seconds_between(int a, int b) const {
+        cuda::check(cudaEventSynchronize(marks_[static_cast<std::size_t>(b)]), "cudaEventSynchronize");
+        float ms = 0;
+        cuda::check(cudaEventElapsedTime(&ms, marks_[static_cast<std::size_t>(a)], marks_[static_cast<std::size_t>(b)]),
+                    "cudaEventElapsedTime");
+        return 1e-3 * ms;
+    }
+    void clear_marks() { next_mark_ = 0; }
 
     // A stable grouping by key (HostExec::group_by_key): the counts by
     // atomic increments (an integer sum, the same in any order), the order
@@ -263,7 +364,7 @@ public:
             values[i] = static_cast<i32>(i);
             hd::atomic_add(count + k, 1);
         });
-        exclusive_scan(scratch, groups, first);
+        offsets_of(scratch, groups, first);
         order.resize(static_cast<std::size_t>(n));
         if (n == 0) return;
         sorted_keys_.resize(static_cast<std::size_t>(n));
@@ -371,6 +472,15 @@ public:
 private:
     static constexpr int kScalars = 4;
 
+    // Blocks of the legality tests' loops a multiprocessor holds at once
+    // (TETISO_GPU_TEST_BLOCKS_PER_SM, for measuring, else what the kernel's
+    // registers allow).
+    static unsigned tests_blocks_per_processor() {
+        const char* text = std::getenv("TETISO_GPU_TEST_BLOCKS_PER_SM");
+        const int blocks = text ? std::atoi(text) : 0;
+        return blocks > 0 ? static_cast<unsigned>(blocks) : 3;
+    }
+
     static int bits_for(i64 groups) {
         int bits = 1;
         while (bits < 31 && (i64{1} << bits) < groups) ++bits;
@@ -396,10 +506,12 @@ private:
     }
 
     cudaStream_t stream_;
-    unsigned resident_blocks_ = 1;
+    unsigned resident_blocks_ = 1, test_blocks_ = 1;
+    std::vector<cudaEvent_t> marks_;
+    std::size_t next_mark_ = 0;
     mutable cuda_exec::Profile profile_;
     i64* pinned_ = nullptr;
-    Array<i64> scalars_;
+    Array<i64> scalars_, tally_;
     Array<std::byte> temp_;
     Array<char> flags_;
     Array<i32> counts_, sort_keys_, sort_values_, sorted_keys_;

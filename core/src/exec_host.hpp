@@ -8,6 +8,8 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
+#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -117,6 +119,33 @@ struct HostExec {
         parallel::exclusive_scan(counts.data(), n, offsets.data());
         return offsets[static_cast<std::size_t>(n)];
     }
+
+    // Counts a driver needs only later (CudaExec keeps them on the device):
+    // count_into and filter_into leave theirs in a slot of the tally, which
+    // tally_at points to and read_tally returns whole.
+    static constexpr int kTallySlots = 8;
+    template <class Counted>
+    void count_into(i64 n, const Counted& counted, int slot) {
+        tally_[static_cast<std::size_t>(slot)] = count(n, counted);
+    }
+    template <class Keep>
+    void filter_into(i64 n, const Keep& keep, Array<i32>& out, int slot) {
+        tally_[static_cast<std::size_t>(slot)] = filter(n, keep, out);
+    }
+    const i64* tally_at(int slot) const { return tally_.data() + slot; }
+    std::array<i64, kTallySlots> read_tally() const { return tally_; }
+
+    // Stage times: mark() notes the time, seconds_between(a, b) the time
+    // from mark a to mark b; clear_marks() forgets them.
+    int mark() {
+        marks_.push_back(std::chrono::steady_clock::now());
+        return static_cast<int>(marks_.size()) - 1;
+    }
+    double seconds_between(int a, int b) const {
+        return std::chrono::duration<double>(marks_[static_cast<std::size_t>(b)] - marks_[static_cast<std::size_t>(a)])
+            .count();
+    }
+    void clear_marks() { marks_.clear(); }
 
     // A stable grouping of 0 .. n-1 by key(i) < groups (parallel.hpp).
     template <class Key>
@@ -253,6 +282,8 @@ private:
         }
     }
 
+    std::array<i64, kTallySlots> tally_{};
+    std::vector<std::chrono::steady_clock::time_point> marks_;
     Array<std::uint32_t> sort_key_, sort_key_spare_, histogram_;
     Array<i32> order_spare_;
 };

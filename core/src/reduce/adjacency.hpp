@@ -233,11 +233,13 @@ void build_fans(Exec& exec, Surface<Exec>& s, bool validate, Fans<Exec>& fans) {
                              validate ? fans.problem_count.data() : nullptr};
     order_fans(exec, tri, nv, validate, nullptr, false, fans, finding);
     const u8* problem = fans.problem.data();
+    // Every round asks once (a fan too large for the stack is a problem too).
+    if (exec.count(nv, [=] TETISO_HD(i64 v) { return problem[v] != kFanOk; }) == 0) return;
     if (exec.count(nv, [=] TETISO_HD(i64 v) { return problem[v] == kFanTooLarge; }) > 0) {
         fans.large_scratch.resize(6 * corners);
         order_fans(exec, tri, nv, validate, fans.large_scratch.data(), true, fans, finding);
+        if (exec.count(nv, [=] TETISO_HD(i64 v) { return problem[v] != kFanOk; }) == 0) return;
     }
-    if (exec.count(nv, [=] TETISO_HD(i64 v) { return problem[v] != kFanOk; }) == 0) return;
 
     // The first faulty vertex, as a serial check would report it.
     typename Exec::template Array<i32> faulty;

@@ -231,13 +231,13 @@ TETISO_HD bool place_samples(const RoundView& m, const EdgeSlots& r, const NewFa
             int at = -1;
             double d = 0.0;
             if (own >= 0) {
-                d = sample_distance(m.samples, sample, fan.p, fan.a[own], fan.b[own]);
+                d = sample_distance(m.samples, sample, fan.p, fan.a(own), fan.b(own));
                 if (base + d <= m.p.max_error) at = own;
             }
             if (at < 0) {
                 d = std::numeric_limits<double>::infinity();
                 for (int f = 0; f < fan.count; ++f) {
-                    const double df = sample_distance(m.samples, sample, fan.p, fan.a[f], fan.b[f]);
+                    const double df = sample_distance(m.samples, sample, fan.p, fan.a(f), fan.b(f));
                     if (df < d) {
                         d = df;
                         at = f;

@@ -207,10 +207,10 @@ TETISO_HD inline bool touch(const Corners& f, const Corners& g) {
 
 // New face f of a collapse, and the face it replaces.
 TETISO_HD inline Corners new_face(const NewFan& fan, int f) {
-    return {{-1, fan.ia[f], fan.ib[f]}, {fan.p, fan.a[f], fan.b[f]}, fan.n[f]};
+    return {{-1, fan.ia[f], fan.ib[f]}, {fan.p, fan.a(f), fan.b(f)}, fan.n[f]};
 }
 TETISO_HD inline Corners old_face(const RoundView& m, const NewFan& fan, int f) {
-    Corners c{{fan.end[f], fan.ia[f], fan.ib[f]}, {m.s.pos(fan.end[f]), fan.a[f], fan.b[f]}, {0, 0, 0}};
+    Corners c{{fan.end[f], fan.ia[f], fan.ib[f]}, {m.s.pos(fan.end[f]), fan.a(f), fan.b(f)}, {0, 0, 0}};
     quality(c.at[0], c.at[1], c.at[2], &c.n);
     return c;
 }
@@ -237,7 +237,7 @@ TETISO_HD inline bool fan_at_p_embedded(const NewFan& fan) {
         for (int g = 0; g < fan.count && !follows; ++g) follows = fan.ib[g] == fan.ia[f];
         if (!follows) first = f, open = true;
     }
-    Vec ray = Vec(fan.a[first]) - fan.p;
+    Vec ray = fan.a(first) - fan.p;
     ray = ray - dot(ray, m) * m;
     const Vec across = cross(m, ray);
     // Each side is measured the same way in both faces that hold it, so that
@@ -245,7 +245,7 @@ TETISO_HD inline bool fan_at_p_embedded(const NewFan& fan) {
     // border, the first side is the first face's own.
     int holding = 0;
     for (int f = 0; f < fan.count; ++f)
-        holding += holds_ray(Vec(fan.a[f]) - fan.p, Vec(fan.b[f]) - fan.p, ray, across, open && f == first);
+        holding += holds_ray(fan.a(f) - fan.p, fan.b(f) - fan.p, ray, across, open && f == first);
     return holding == 1;
 }
 
@@ -267,7 +267,7 @@ TETISO_HD inline bool ring_clear(const RoundView& m, i32 u, i32 w, const NewFan&
             const int h = at_v[j];
             if (norm2(fan.n[h]) == 0) continue;
             const i32 o = fan.ia[h] == v ? fan.ib[h] : fan.ia[h];
-            const Vec po = fan.ia[h] == v ? Vec(fan.b[h]) : Vec(fan.a[h]);
+            const Vec po = fan.ia[h] == v ? fan.b(h) : fan.a(h);
             bool overlap;
             if (x == o || y == o) {
                 // Across the edge (v, o): only a face folded flat onto h.
@@ -300,7 +300,7 @@ TETISO_HD inline bool clear_of_neighbours(const RoundView& m, i32 u, i32 w, bool
         for (int f = 0; f < fan.count; ++f) {
             if (norm2(fan.n[f]) == 0) continue;
             for (int g = f + 1; g < fan.count; ++g)
-                if (!apart(fan.p, fan.n[f], fan.a[g], fan.b[g]) && touch(new_face(fan, f), new_face(fan, g)) &&
+                if (!apart(fan.p, fan.n[f], fan.a(g), fan.b(g)) && touch(new_face(fan, f), new_face(fan, g)) &&
                     !touch(old_face(m, fan, f), old_face(m, fan, g)))
                     return false;
         }
@@ -354,9 +354,10 @@ struct Placements {
 // where the samples are placed later, one by one (place_leaf_sample), this
 // takes the bound they start from and the test places none (nor writes the
 // new faces' bound); null to place them here.
-template <class Owns>
-TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsView& ops, i32 i, i32* owner,
-                              const Owns& owns, double* deferred = nullptr) {
+// The tests of a placed collapse that read connectivity alone (the link
+// condition, locked vertices, valences, border loops): cheap, and most
+// collapses that fail, fail here.
+TETISO_HD inline bool connectivity_allows(const RoundView& m, const EdgeSlots& r, const OpsView& ops, i32 i) {
     const i32 u = r.u, w = r.w, c = r.c, d = r.d;
     const bool border_edge = r.f1 < 0 || r.f2 < 0;
     // Link condition.
@@ -383,16 +384,25 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
             const i32 x = m.fans.nbr(gone, j);
             if (x != keep && x != c && x != d && m.s.locked(x)) return false;
         }
-    // Valences, border loops.
+    // Valences, border loops (of 3 edges: both ends' other border
+    // neighbour the same).
     if (nu + nw - 2 - common < ((m.border(u) || m.border(w)) ? 2 : 3)) return false;
     for (const i32 o : {c, d})
         if (o >= 0 && m.fans.nn(o) - 1 < (m.border(o) ? 2 : 3)) return false;
+    return !border_edge || m.border_other(u, w) != m.border_other(w, u);
+}
+
+template <class Owns>
+TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsView& ops, i32 i, i32* owner,
+                              const Owns& owns, double* deferred = nullptr) {
+    const i32 u = r.u, w = r.w;
+    const bool border_edge = r.f1 < 0 || r.f2 < 0;
+    if (!connectivity_allows(m, r, ops, i)) return false;
     const Vec p{ops.px[i], ops.py[i], ops.pz[i]};
     const Vec pu = m.s.pos(u), pw = m.s.pos(w);
     double increment = 0.0;
     if (border_edge) {
         const i32 up = m.border_other(u, w), wn = m.border_other(w, u);
-        if (up == wn) return false; // a border loop of 3 edges
         const Vec a = m.s.pos(up), b = m.s.pos(wn);
         for (const Vec q : {pu, pw})
             increment =
@@ -422,6 +432,7 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
     // New faces: (p, next, prev) for every other face of both leaves.
     NewFan fan;
     fan.p = p;
+    fan.xyz = m.s.xyz;
     int faces = 0;
     bool spoiled = false;
     for_each_leaf_face(r, [&](i32 slot, bool removed) {
@@ -451,8 +462,6 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
                             (g.valid() ? q_new > 0 && !removes_valence3 && dot(n, g.n()) < m.p.cos_turn
                                        : resolved(p, a, b) && dot(n, nsum) < 0));
         if (faces < NewFan::kMax) {
-            fan.a[faces] = a;
-            fan.b[faces] = b;
             fan.n[faces] = n;
             fan.ia[faces] = ia;
             fan.ib[faces] = ib;

@@ -126,27 +126,29 @@ TETISO_HD void for_each_leaf_face(const EdgeSlots& r, const F& f) {
         if (j != r.wf1 && j != r.wf2) f(r.ow + j, false);
 }
 
-// A vertex position as stored (float), read as a Vec: the conversion is
-// exact, so keeping a float costs nothing in accuracy and halves the record.
-struct Point {
-    float x, y, z;
-    Point() = default;
-    TETISO_HD Point(Vec v) : x(static_cast<float>(v.x)), y(static_cast<float>(v.y)), z(static_cast<float>(v.z)) {}
-    TETISO_HD operator Vec() const { return {x, y, z}; }
-};
-
-// The faces a collapse makes: (p, a[f], b[f]), which replace triangle tri[f]
+// The faces a collapse makes: (p, a(f), b(f)), which replace triangle tri[f]
 // (the same index: apply rewrites triangles in place). A test's largest
-// record (6 KB, on the stack; on the GPU each thread's local memory, which
-// the driver reserves for every thread the device can hold).
+// record (on the stack; on the GPU each thread's local memory, which the
+// driver reserves for every thread the device can hold). The other corners
+// are vertices of the surface, read from its positions where needed rather
+// than kept: what a test keeps in local memory it reads back from there,
+// and the positions are shared by every test in the caches.
 struct NewFan {
     static constexpr int kMax = 96;
     Vec p;
-    Point a[kMax], b[kMax]; // the new faces' other corners, vertices of the surface
-    Vec n[kMax];            // unit normal, zero when degenerate
+    const float* xyz; // the surface's positions
+    Vec n[kMax];      // unit normal, zero when degenerate
     i32 ia[kMax], ib[kMax], tri[kMax];
     i32 end[kMax]; // the end, u or w, whose place p takes in this face
     int count = 0;
+    TETISO_HD Vec a(int f) const { return position(ia[f]); }
+    TETISO_HD Vec b(int f) const { return position(ib[f]); }
+
+private:
+    TETISO_HD Vec position(i32 v) const {
+        const float* q = xyz + 3 * static_cast<std::size_t>(v);
+        return {q[0], q[1], q[2]};
+    }
 };
 
 } // namespace tetiso::reduction

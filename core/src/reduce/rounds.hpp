@@ -27,7 +27,6 @@
 #pragma once
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <vector>
@@ -141,15 +140,27 @@ void load_piece(Exec& exec, const Piece& in, bool bounded, ReductionState<Exec>&
 template <class Exec>
 void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& options, int threads_available,
                 ReduceReport& rep) {
-    using clock = std::chrono::steady_clock;
     const Params params = make_params(options);
     Surface<Exec>& s = st.s;
     exec.assign(st.changed, s.nv, u8{0});
     exec.assign(st.refused_slots, s.nv, u32{0});
     ReduceStageSeconds& seconds = rep.stages;
-    auto since = [&](clock::time_point t) {
-        exec.sync();
-        return std::chrono::duration<double>(clock::now() - t).count();
+    // Stage times are marks (on the device, events on its stream), summed
+    // once the round is over: timing a stage never waits for the device.
+    struct Lap {
+        double* into;
+        int from, to;
+    };
+    std::vector<Lap> laps;
+    int last_mark = 0;
+    const auto lap = [&](double& into) {
+        const int now = exec.mark();
+        laps.push_back({&into, last_mark, now});
+        last_mark = now;
+    };
+    const auto settle_laps = [&] {
+        for (const Lap& l : laps) *l.into += exec.seconds_between(l.from, l.to);
+        laps.clear();
     };
     int idle_rounds = 0;
     for (int round = 0;; ++round) {
@@ -158,19 +169,20 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
                 if (const int offered = options.more_threads(); offered > 0) threads_available = offered;
             exec.threads = std::min(threads_available, kMaxRoundThreads);
         }
-        const auto round_start = clock::now();
-        auto t0 = round_start;
+        exec.clear_marks();
+        const int round_start = exec.mark();
+        last_mark = round_start;
         build_fans(exec, s, round == 0, st.fans);
-        seconds.fans += since(t0);
-        if (round >= options.max_rounds) break;
-        t0 = clock::now();
+        lap(seconds.fans);
+        if (round >= options.max_rounds) {
+            settle_laps();
+            break;
+        }
         const FansView fans = st.fans.view();
         build_edges(exec, fans, s.nv, st.edges);
-        seconds.edges += since(t0);
-        t0 = clock::now();
+        lap(seconds.edges);
         build_geometry(exec, s.view(), st.geometry);
-        seconds.geometry += since(t0);
-        t0 = clock::now();
+        lap(seconds.geometry);
         const i32 ne = st.edges.n;
         const auto edge_count = static_cast<std::size_t>(ne);
         for (auto* a : {&st.px, &st.py, &st.pz, &st.err}) a->resize(edge_count);
@@ -202,12 +214,11 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         const i32 candidates = exec.filter(ne, [=] TETISO_HD(i64 e) {
             return kind[e] == kPending || kind[e] == kCollapse;
         }, st.candidates);
-        seconds.propose += since(t0);
+        lap(seconds.propose);
         ReduceRound stats;
         stats.round = round;
         stats.vertices = static_cast<std::size_t>(s.nv);
         stats.triangles = static_cast<std::size_t>(s.nt);
-        t0 = clock::now();
 
         // Collapses. The selection places a pending collapse (Φ, position)
         // only when it reaches it unblocked: most are blocked by a chosen
@@ -260,33 +271,25 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         }
         {
             const i32* list = st.candidates.data();
-            evaluated += static_cast<std::size_t>(
-                exec.count(candidates, [=] TETISO_HD(i64 k) { return kind[list[k]] != kPending; }));
+            exec.count_into(candidates, [=] TETISO_HD(i64 k) { return kind[list[k]] != kPending; }, kTallyEvaluated);
         }
         stats.candidates = static_cast<std::size_t>(candidates) + static_cast<std::size_t>(flips);
         stats.selection_steps = sel.steps;
-        stats.evaluated = evaluated;
-        seconds.select += since(t0);
-        t0 = clock::now();
+        lap(seconds.select);
 
         // Samples still to move: those of the flips (a collapse's test moved
-        // its samples when it was chosen).
-        stats.collapses = static_cast<std::size_t>(
-            exec.count(ne, [=] TETISO_HD(i64 e) { return chosen[e] && kind[e] == kCollapse; }));
-        stats.flips = static_cast<std::size_t>(
-            exec.filter(ne, [=] TETISO_HD(i64 e) { return chosen[e] && kind[e] == kFlip; }, st.to_move));
-        if (stats.collapses == 0 && stats.flips == 0) { // the next round would find what this one did
-            stats.seconds = since(round_start);
-            rep.rounds.push_back(stats);
-            break;
-        }
+        // its samples when it was chosen). A round that chose nothing goes
+        // on to the end, changing nothing, and then stops: the next round
+        // would find what this one did.
+        exec.count_into(ne, [=] TETISO_HD(i64 e) { return chosen[e] && kind[e] == kCollapse; }, kTallyCollapses);
+        exec.filter_into(ne, [=] TETISO_HD(i64 e) { return chosen[e] && kind[e] == kFlip; }, st.to_move, kTallyFlips);
         // The samples move first: they are placed on the new faces by reading
         // the fans and positions that their legality test read. Each move
         // costs about what a legality test does.
         if (st.samples.on) {
             const i32* list = st.to_move.data();
-            exec.for_each(static_cast<i64>(stats.flips), [=] TETISO_HD(i64 k) { move_flip_samples(m, list[k], owner); },
-                          Exec::Grain::kTests);
+            exec.for_each_of(exec.tally_at(kTallyFlips), ne, [=] TETISO_HD(i64 k) { move_flip_samples(m, list[k], owner); },
+                             Exec::Grain::kTests);
         }
         Compaction<Exec>& c = st.compaction;
         exec.assign(c.vertex_alive, s.nv, u8{1});
@@ -297,15 +300,25 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         exec.for_each(ne, [=] TETISO_HD(i64 e) {
             if (chosen[e]) apply_operation(surface, fans, edges, ops, applied, static_cast<i32>(e));
         });
-        stats.changed_vertices = static_cast<std::size_t>(exec.count(s.nv, [=] TETISO_HD(i64 v) {
-            return (applied.changed[v] & applied.vertex_alive[v]) != 0;
-        }));
-        seconds.apply += since(t0);
-        t0 = clock::now();
+        exec.count_into(s.nv, [=] TETISO_HD(i64 v) { return (applied.changed[v] & applied.vertex_alive[v]) != 0; },
+                        kTallyChanged);
+        const auto tally = exec.read_tally(); // the round's one wait for its statistics
+        stats.evaluated = evaluated + static_cast<std::size_t>(tally[kTallyEvaluated]);
+        stats.collapses = static_cast<std::size_t>(tally[kTallyCollapses]);
+        stats.flips = static_cast<std::size_t>(tally[kTallyFlips]);
+        stats.changed_vertices = static_cast<std::size_t>(tally[kTallyChanged]);
+        lap(seconds.apply);
+        if (stats.collapses == 0 && stats.flips == 0) {
+            settle_laps();
+            stats.seconds = exec.seconds_between(round_start, last_mark);
+            rep.rounds.push_back(stats);
+            break;
+        }
         if (stats.collapses > 0)
             compact(exec, s, c, st.changed, st.refused_slots, owner, st.samples.on ? st.samples.count : 0);
-        seconds.compact += since(t0);
-        stats.seconds = since(round_start);
+        lap(seconds.compact);
+        settle_laps();
+        stats.seconds = exec.seconds_between(round_start, last_mark);
         rep.rounds.push_back(stats);
         idle_rounds = stats.collapses == 0 ? idle_rounds + 1 : 0;
         if (idle_rounds >= 2) break;

@@ -142,13 +142,20 @@ struct CollapseTest {
     }
     // The verdict of the tests on the round's state, its corners taken as
     // free, with nothing written that the round reads and the samples left
-    // for place() (their starting bound in *deferred).
-    TETISO_HD Verdict dry_run(i32 e, double* deferred) const {
+    // for place() (their starting bound in *deferred), in two stages: the
+    // first places the collapse and runs the tests of connectivity (false:
+    // illegal); the second, only after a first that passed, the rest.
+    TETISO_HD bool dry_run_connectivity(i32 e) const {
         dry.kind[e] = ops.kind[e];
         dry.px[e] = ops.px[e];
         dry.py[e] = ops.py[e];
         dry.pz[e] = ops.pz[e];
         dry.survivor[e] = ops.survivor[e];
+        const EdgeSlots r = slots(m, e);
+        if (dry.kind[e] == kPending && !place_collapse(m, r, dry, e)) return false;
+        return connectivity_allows(m, r, dry, e);
+    }
+    TETISO_HD Verdict dry_run_rest(i32 e, double* deferred) const {
         return legal(m, e, dry, nullptr, [](const i32*, int) { return true; }, deferred);
     }
     TETISO_HD bool samples_on() const { return m.samples.on; }
@@ -189,6 +196,7 @@ struct Selection {
     // the lowest rank of a chosen operation that claimed it.
     Array<u8> outcome;
     Array<i32> entrants, claim_rank;
+    Array<i32> dry_survivors; // the ranks whose dry run passed its first stage
     // The samples of the dry runs' leaves, one item each: per rank its
     // first item and bound, per item the sample and where it goes.
     Array<i32> sample_count, sample_first, item_sample, item_triangle;
@@ -249,6 +257,10 @@ TETISO_HD inline i32 rank_of_item(const i32* first, i32 n, i32 item) {
     return low;
 }
 
+// The counts of a round that CudaExec keeps on the device (the slots of
+// Exec::count_into, filter_into).
+enum TallySlot : int { kTallyEvaluated, kTallyCollapses, kTallyFlips, kTallyChanged, kTallyDrySurvivors };
+
 // Speculation's dry runs: every collapse of the round tested on its state,
 // its samples placed one a thread (the tests of a collapse are a few hundred
 // steps, its samples' placement as many again for each sample, which late
@@ -268,10 +280,23 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
     }
     u64* worst = sel.worst_bits.data();
     i32* count = sel.sample_count.data();
+    // In two stages, so that the geometric tests, long and with a large
+    // scratch each, run only for the collapses that pass the cheap ones,
+    // side by side (on the GPU, warps of collapses that all go on).
     exec.for_each(n, [=] TETISO_HD(i64 k) {
-        const i32 e = order[k];
+        const bool maybe = test.dry_run_connectivity(order[k]);
+        outcome[k] = maybe ? kOutcomeUndecided : kOutcomeIllegal;
+        if (!samples) return;
+        worst[k] = hd::bits(0.0);
+        count[k] = 0;
+    });
+    exec.filter_into(n, [=] TETISO_HD(i64 k) { return outcome[k] == kOutcomeUndecided; }, sel.dry_survivors,
+                     kTallyDrySurvivors);
+    const i32* survivors = sel.dry_survivors.data();
+    exec.for_each_of(exec.tally_at(kTallyDrySurvivors), n, [=] TETISO_HD(i64 j) {
+        const i32 k = survivors[j], e = order[k];
         double deferred = 0.0;
-        const bool legal = test.dry_run(e, samples ? &deferred : nullptr) == Verdict::kLegal;
+        const bool legal = test.dry_run_rest(e, samples ? &deferred : nullptr) == Verdict::kLegal;
         outcome[k] = legal ? kOutcomeUndecided : kOutcomeIllegal;
         if (!samples) return;
         worst[k] = hd::bits(deferred);
