@@ -24,11 +24,13 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "device_entry.hpp"
 #include "extract_rules.hpp"
 #include "parallel.hpp"
 #include "tetiso/error.hpp"
@@ -196,7 +198,9 @@ void extract_rules::check_domain(const Domain& domain) {
     }
 }
 
-Piece extract(const Domain& domain, float level, const ExtractOptions& options) {
+namespace {
+
+Piece extract_on_host(const Domain& domain, float level, const ExtractOptions& options) {
     extract_rules::check_domain(domain);
     const std::size_t nodes = domain.node_count();
     const std::size_t tets = domain.tet_count();
@@ -287,6 +291,16 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
     if (!order_by_key(piece))
         throw InternalError(domain_name(domain.id) + ": two vertices of the surface share a key");
     piece.domains = {domain.id};
+    return piece;
+}
+
+} // namespace
+
+Piece extract(const Domain& domain, float level, const ExtractOptions& options, StageSeconds* seconds) {
+    if (options.device.is_gpu()) return on_gpu::extract(options.device.state(), domain, level, nullptr, nullptr, seconds);
+    const auto start = std::chrono::steady_clock::now();
+    Piece piece = extract_on_host(domain, level, options);
+    if (seconds) seconds->extract += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return piece;
 }
 

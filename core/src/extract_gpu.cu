@@ -1,4 +1,4 @@
-// Marching tetrahedra on a CUDA GPU (tetiso/gpu.hpp). The CPU version
+// Marching tetrahedra on a CUDA Device (tetiso/device.hpp). The CPU version
 // (extract.cpp) numbers crossings through per-node buckets filled by atomics;
 // here every cut tetrahedron writes its crossing edges as 64-bit codes
 // (local lo << 32 | local hi), and one radix sort and unique give the vertices
@@ -28,10 +28,9 @@
 
 #include "extract_rules.hpp"
 #include "field_formulas.hpp"
-#include "gpu_state.cuh"
+#include "device_cuda.cuh"
 #include "lattice_cells.hpp"
 #include "tetiso/error.hpp"
-#include "tetiso/gpu.hpp"
 #include "tetiso/lattice.hpp"
 
 namespace tetiso {
@@ -44,11 +43,6 @@ using i32 = std::int32_t;
 
 using cuda::check;
 using cuda::DeviceArray;
-
-// Each GPU thread's stack: the largest frame of the reduction's kernels (the
-// legality test, 7.4 KB on sm_90 with nvcc 13) with room to spare. The
-// device reserves it for every thread it can hold (about 2 GB on an H100).
-constexpr std::size_t kStackBytes = 8 * 1024;
 
 void check_cuda(cudaError_t status, const char* what) { check(status, what); }
 
@@ -273,6 +267,11 @@ unsigned long long read_scalar(ExtractionBuffers& b, cudaStream_t stream, std::s
 template <class Tets>
 DeviceSurface run_extraction(ExtractionBuffers& b, cudaStream_t stream, int domain_id, Tets tet_source,
                              std::size_t nodes, std::size_t tets, float level) {
+    if (!b.case_table_loaded) {
+        const CaseTable table = make_case_table();
+        check_cuda(cudaMemcpyToSymbol(c_cases, &table, sizeof table), "copying the case table");
+        b.case_table_loaded = true;
+    }
     // 1. classify
     const unsigned long long no_tet = ULLONG_MAX, zero = 0;
     check_cuda(cudaMemcpyAsync(b.scalars.data(), &zero, sizeof zero, cudaMemcpyHostToDevice, stream), "reset");
@@ -430,54 +429,7 @@ void upload(DeviceArray<T>& device, const std::vector<T, Allocator>& host, cudaS
 
 } // namespace
 
-GpuInfo gpu_info(int device) {
-    int count = 0;
-    const cudaError_t status = cudaGetDeviceCount(&count);
-    if (status != cudaSuccess) return {false, std::string("no usable CUDA device (") + cudaGetErrorString(status) + ")"};
-    if (count == 0) return {false, "no CUDA device"};
-    if (device < 0 || device >= count)
-        return {false, "no CUDA device " + std::to_string(device) + " (this machine has " + std::to_string(count) + ")"};
-    cudaDeviceProp prop{};
-    if (cudaGetDeviceProperties(&prop, device) != cudaSuccess)
-        return {false, "CUDA device " + std::to_string(device) + " cannot be queried"};
-    return {true,
-            std::string(prop.name) + ", " + std::to_string(prop.totalGlobalMem >> 20) + " MiB, compute capability " +
-                std::to_string(prop.major) + "." + std::to_string(prop.minor),
-            prop.totalGlobalMem};
-}
-
-int gpu_count() {
-    int count = 0;
-    return cudaGetDeviceCount(&count) == cudaSuccess ? count : 0;
-}
-
-Gpu::State::State(int device_index) : device(device_index) {
-    const GpuInfo info = gpu_info(device_index);
-    if (!info.available) throw Error("GPU: " + info.description);
-    description = info.description;
-    // The reduction's legality tests keep a collapse's new faces on the
-    // stack (several KB a thread). By default the driver grows local memory
-    // for such a launch and shrinks it after, which cost every launch of
-    // them about half a millisecond, whatever its size; keep it grown. Too
-    // late where this process already uses the device (another Gpu of it):
-    // then the stack limit alone, set below, spares the resizing.
-    if (cudaInitDevice(device_index, cudaDeviceLmemResizeToMax, cudaInitDeviceFlagsAreValid) != cudaSuccess)
-        cudaGetLastError();
-    use_device();
-    check_cuda(cudaDeviceSetLimit(cudaLimitStackSize, kStackBytes), "setting the GPU threads' stack size");
-    check_cuda(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking), "cudaStreamCreate");
-    const CaseTable table = make_case_table();
-    check_cuda(cudaMemcpyToSymbol(c_cases, &table, sizeof table), "copying the case table");
-    extraction.scalars.resize(4);
-    exec = std::make_unique<CudaExec>(stream);
-}
-
-Gpu::State::~State() {
-    exec.reset();
-    if (stream) cudaStreamDestroy(stream);
-}
-
-DeviceSurface Gpu::State::extract(const Domain& domain, float level) {
+DeviceSurface Device::State::extract(const Domain& domain, float level) {
     extract_rules::check_domain(domain);
     extract_rules::check_level(level);
     use_device();
@@ -500,11 +452,10 @@ DeviceSurface Gpu::State::extract(const Domain& domain, float level) {
     const DeviceSurface surface = run_extraction(b, stream, domain.id, TetArray{reinterpret_cast<const int4*>(b.tets.data())},
                                                  domain.node_count(), tets, level);
     timings.extract = seconds_since(start);
-    timings.compute = timings.extract;
     return surface;
 }
 
-DeviceSurface Gpu::State::extract(const Decomposition& decomposition, int domain, const Field& field, float level) {
+DeviceSurface Device::State::extract(const Decomposition& decomposition, int domain, const Field& field, float level) {
     const CellBox& box = decomposition.box(domain);
     const std::size_t nodes = decomposition.node_count(domain);
     if (nodes > static_cast<std::size_t>(INT32_MAX) / extract_rules::kBucket)
@@ -541,11 +492,10 @@ DeviceSurface Gpu::State::extract(const Decomposition& decomposition, int domain
     }
     const DeviceSurface surface = run_extraction(b, stream, domain, LatticeTets{cells}, nodes, tets, level);
     timings.extract = seconds_since(start);
-    timings.compute = timings.extract;
     return surface;
 }
 
-Piece Gpu::State::download(const DeviceSurface& s) {
+Piece Device::State::download(const DeviceSurface& s) {
     const auto start = std::chrono::steady_clock::now();
     Piece piece;
     auto fetch = [&](auto& host, const auto* device, std::size_t n) {
@@ -565,25 +515,6 @@ Piece Gpu::State::download(const DeviceSurface& s) {
     piece.domains = {s.domain};
     timings.download = seconds_since(start);
     return piece;
-}
-
-Gpu::Gpu(int device) : state_(std::make_unique<State>(device)) {}
-Gpu::~Gpu() = default;
-
-int Gpu::device() const { return state_->device; }
-const std::string& Gpu::description() const { return state_->description; }
-const GpuTimings& Gpu::last_timings() const { return state_->timings; }
-
-std::size_t Gpu::bytes_held() const { return cuda::bytes_held.load(); }
-
-Piece Gpu::extract(const Domain& domain, float level) {
-    state_->timings = {};
-    return state_->download(state_->extract(domain, level));
-}
-
-Piece Gpu::extract(const Decomposition& decomposition, int domain, const Field& field, float level) {
-    state_->timings = {};
-    return state_->download(state_->extract(decomposition, domain, field, level));
 }
 
 } // namespace tetiso

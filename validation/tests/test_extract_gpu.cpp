@@ -25,7 +25,8 @@
 #include "test_support.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
-#include "tetiso/gpu.hpp"
+#include "tetiso/device.hpp"
+#include "tetiso/domain_task.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/mesh_partition.hpp"
@@ -40,11 +41,26 @@ namespace {
         if (!info.available) GTEST_SKIP() << "no GPU: " << info.description;      \
     } while (false)
 
-// One GPU for the whole program: its buffers then serve domains of every
-// size in turn, which is how a worker uses it.
-Gpu& gpu() {
-    static Gpu device;
-    return device;
+// Extraction on one GPU for the whole program: its buffers then serve
+// domains of every size in turn, which is how a worker uses it.
+struct GpuExtraction {
+    Device device = Device::cuda();
+    Piece extract(const Domain& domain, float level) const {
+        return tetiso::extract(domain, level, ExtractOptions{1, device});
+    }
+    // A lattice domain as a domain task makes it on the GPU: built on the
+    // device, a built-in field evaluated there, an expression's values uploaded.
+    Piece extract(const LatticePartition& lattice, int domain, float level) const {
+        DomainTaskOptions task;
+        task.level = level;
+        task.device = device;
+        return run_domain_task(lattice, domain, task).piece;
+    }
+};
+
+const GpuExtraction& gpu() {
+    static const GpuExtraction extraction;
+    return extraction;
 }
 
 template <class T>
@@ -95,9 +111,9 @@ class GpuLattice : public ::testing::TestWithParam<LatticeCase> {};
 TEST_P(GpuLattice, EveryDomainIsTheCpuPieceBitForBit) {
     SKIP_WITHOUT_GPU();
     const LatticeCase& c = GetParam();
-    const Lattice lattice(c.n);
-    const Decomposition decomposition(lattice, c.domains);
-    const auto field = make_field(c.field);
+    const LatticePartition partition(c.n, c.domains, make_field(c.field));
+    const Decomposition& decomposition = partition.decomposition();
+    const Field* field = &partition.field();
     const auto level = static_cast<float>(c.level.value_or(field->default_level()));
     std::size_t triangles = 0;
     for (int d = 0; d < decomposition.domain_count(); ++d) {
@@ -107,7 +123,7 @@ TEST_P(GpuLattice, EveryDomainIsTheCpuPieceBitForBit) {
         EXPECT_TRUE(identical(cpu, gpu().extract(domain, level))) << "domain " << d;
         // The lattice path: the domain built on the device, a built-in field
         // evaluated there, an expression's values uploaded.
-        EXPECT_TRUE(identical(cpu, gpu().extract(decomposition, d, *field, level)))
+        EXPECT_TRUE(identical(cpu, gpu().extract(partition, d, level)))
             << "domain " << d << ", built on the device";
     }
     EXPECT_GT(triangles, 0u); // the case has a surface to compare
@@ -234,13 +250,11 @@ TEST(Gpu, BadDomainsGiveTheCpuErrors) {
 
 TEST(Gpu, BadLatticeValuesGiveTheCpuErrors) {
     SKIP_WITHOUT_GPU();
-    const Lattice lattice(11);
-    const Decomposition four(lattice, 4);
     // Infinite on the plane x = 2.5, which holds lattice nodes.
-    const auto pole = make_field("1/(x-2.5)");
+    const LatticePartition four(11, 4, make_field("1/(x-2.5)"));
     for (int d = 0; d < four.domain_count(); ++d) {
-        const std::string cpu = error_of([&] { extract(four.make_domain(d, *pole), 0.5f); });
-        EXPECT_EQ(cpu, error_of([&] { gpu().extract(four, d, *pole, 0.5f); })) << d;
+        const std::string cpu = error_of([&] { extract(four.make_domain(d), 0.5f); });
+        EXPECT_EQ(cpu, error_of([&] { gpu().extract(four, d, 0.5f); })) << d;
     }
 }
 
@@ -264,7 +278,7 @@ TEST(Gpu, WithoutADeviceAskingForOneIsAClearError) {
     const GpuInfo info = gpu_info();
     if (info.available) GTEST_SKIP() << "a GPU is present: " << info.description;
     EXPECT_FALSE(info.description.empty());
-    const std::string message = error_of([] { Gpu device; });
+    const std::string message = error_of([] { Device::cuda(); });
     EXPECT_EQ(message.rfind("GPU: ", 0), 0u) << message;
 }
 

@@ -17,7 +17,8 @@
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/field.hpp"
-#include "tetiso/gpu.hpp"
+#include "tetiso/device.hpp"
+#include "tetiso/domain_task.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/mesh_partition.hpp"
 #include "tetiso/schedule.hpp"
@@ -35,6 +36,23 @@ ReduceOptions domain_options(double spacing, double bound = 0.25) {
     o.max_error = bound * spacing;
     o.keep_samples = true;
     return o;
+}
+
+// A domain's task on the GPU, extraction and reduction, as the job runs it.
+Piece gpu_task(Domain domain, float level, const ReduceOptions& o) {
+    DomainTaskOptions task;
+    task.level = level;
+    task.device = the_gpu();
+    task.reduce = o;
+    return run_domain_task(std::move(domain), task).piece;
+}
+
+Piece gpu_task(const LatticePartition& lattice, int domain, float level, const ReduceOptions& o) {
+    DomainTaskOptions task;
+    task.level = level;
+    task.device = the_gpu();
+    task.reduce = o;
+    return run_domain_task(lattice, domain, task).piece;
 }
 
 std::string error_of(const std::function<void()>& f) {
@@ -64,9 +82,10 @@ class GpuDomainTask : public ::testing::TestWithParam<LatticeCase> {};
 // reduces, and only the piece comes back.
 TEST_P(GpuDomainTask, IsTheCpuPieceByteForByte) {
     const LatticeCase& c = GetParam();
-    const Lattice lattice(c.n);
-    const Decomposition decomposition(lattice, c.domains);
-    const auto field = make_field(c.field);
+    const LatticePartition partition(c.n, c.domains, make_field(c.field));
+    const Lattice& lattice = partition.lattice();
+    const Decomposition& decomposition = partition.decomposition();
+    const Field* field = &partition.field();
     const auto level = static_cast<float>(field->default_level());
     const ReduceOptions o = domain_options(lattice.spacing(), c.bound);
     std::size_t locked = 0, reduced = 0;
@@ -75,7 +94,7 @@ TEST_P(GpuDomainTask, IsTheCpuPieceByteForByte) {
         const Piece cpu = reduce(raw, o);
         locked += static_cast<std::size_t>(std::count(cpu.flags.begin(), cpu.flags.end(), kLocked));
         reduced += raw.triangle_count() - cpu.triangle_count();
-        EXPECT_TRUE(same_piece(cpu, the_gpu().extract_and_reduce(decomposition, d, *field, level, o))) << "domain " << d;
+        EXPECT_TRUE(same_piece(cpu, gpu_task(partition, d, level, o))) << "domain " << d;
     }
     EXPECT_GT(reduced, 0u);
     if (c.domains > 1) {
@@ -100,7 +119,7 @@ TEST(GpuPipeline, RandomValuesGiveTheCpuPiece) {
         const float level = seed == 1 ? 0.0f : value(random) * 0.5f;
         for (float& f : domain.f) f = random() % 10 == 0 ? level : value(random);
         const ReduceOptions o = domain_options(lattice.spacing());
-        EXPECT_TRUE(same_piece(reduce(extract(domain, level), o), the_gpu().extract_and_reduce(domain, level, o)))
+        EXPECT_TRUE(same_piece(reduce(extract(domain, level), o), gpu_task(domain, level, o)))
             << "seed " << seed;
     }
 }
@@ -130,7 +149,7 @@ TEST(GpuPipeline, UnstructuredDomainsGiveTheCpuPieces) {
             cpu_error = e.what();
         }
         Piece gpu;
-        const std::string gpu_error = error_of([&] { gpu = the_gpu().extract_and_reduce(domain, 1.5f, o); });
+        const std::string gpu_error = error_of([&] { gpu = gpu_task(domain, 1.5f, o); });
         EXPECT_EQ(cpu_error.empty() ? "(no error)" : cpu_error, gpu_error) << "domain " << d;
         if (cpu_error.empty()) {
             EXPECT_TRUE(same_piece(cpu, gpu)) << "domain " << d;
@@ -206,10 +225,10 @@ TEST(GpuPipeline, BadDomainGivesTheCpuError) {
     const ReduceOptions o = domain_options(lattice.spacing());
     const std::string cpu = error_of([&] { reduce(extract(domain, 2.0f), o); });
     EXPECT_NE(cpu, "(no error)");
-    EXPECT_EQ(cpu, error_of([&] { the_gpu().extract_and_reduce(domain, 2.0f, o); }));
+    EXPECT_EQ(cpu, error_of([&] { gpu_task(domain, 2.0f, o); }));
     // The GPU stays usable.
     const Domain good = one.make_domain(0, *field);
-    EXPECT_TRUE(same_piece(reduce(extract(good, 2.0f), o), the_gpu().extract_and_reduce(good, 2.0f, o)));
+    EXPECT_TRUE(same_piece(reduce(extract(good, 2.0f), o), gpu_task(good, 2.0f, o)));
 }
 
 } // namespace
