@@ -60,7 +60,6 @@ Device::State::State(int device_index) : device(device_index) {
     use_device();
     cuda::check(cudaDeviceSetLimit(cudaLimitStackSize, kStackBytes), "setting the GPU threads' stack size");
     cuda::check(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking), "cudaStreamCreate");
-    extraction.scalars.resize(4);
     exec = std::make_unique<CudaExec>(stream);
 }
 

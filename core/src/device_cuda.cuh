@@ -14,6 +14,7 @@
 
 #include "cuda_support.cuh"
 #include "exec_cuda.cuh"
+#include "marching_tets.hpp"
 #include "reduce/rounds.hpp"
 #include "tetiso/device.hpp"
 #include "tetiso/field.hpp"
@@ -34,29 +35,17 @@ struct DeviceSurface {
     int domain;
 };
 
-// The passes of marching tetrahedra on the device (extract_gpu.cu).
+// What extraction keeps on the device (extract_gpu.cu): the domain, and the
+// arrays of the passes of marching tetrahedra (marching_tets.hpp).
 struct ExtractionBuffers {
     template <class T>
     using Array = cuda::DeviceArray<T>;
-    // The domain.
     Array<float> x, y, z, f;
     Array<GlobalId> gid;
     Array<std::uint8_t> interface;
     Array<EdgeKey> shared;
     Array<std::int32_t> tets;
-    // Per node and per tetrahedron.
-    Array<std::uint8_t> above, pattern;
-    Array<std::uint32_t> crossings, first_crossing, triangles_per_tet, first_triangle;
-    // Crossings, then vertices.
-    Array<std::uint64_t> codes, sorted_codes, edges;
-    Array<float> vx, vy, vz, sx, sy, sz;
-    Array<EdgeKey> key, sorted_key;
-    Array<std::uint8_t> flags, sorted_flags;
-    Array<std::int32_t> corners, order, sorted_order, rank;
-    // Scalars the host reads: bad node, bad tetrahedron, unique count, unsorted flag.
-    Array<unsigned long long> scalars;
-    Array<std::byte> scratch; // CUB's temporary storage
-    bool case_table_loaded = false; // in the device's constant memory
+    marching::Arrays<CudaExec> passes;
 };
 
 struct Device::State {
