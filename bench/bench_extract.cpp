@@ -34,7 +34,8 @@
 
 #include "bench_main.hpp"
 #include "tetiso/extract.hpp"
-#include "tetiso/gpu.hpp"
+#include "tetiso/device.hpp"
+#include "tetiso/domain_task.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/mesh.hpp"
@@ -100,57 +101,65 @@ void bench_tetiso(benchmark::State& state, std::int64_t n, int threads) {
 }
 
 // One GPU for every case: its buffers outlive a case, as in a worker.
-tetiso::Gpu& gpu_extractor() {
-    static tetiso::Gpu gpu;
+const tetiso::Device& gpu_extractor() {
+    static const tetiso::Device gpu = tetiso::Device::cuda();
     return gpu;
+}
+
+// A lattice domain as a domain task makes it on a GPU: built on the device.
+tetiso::Piece extract_lattice(const tetiso::LatticePartition& lattice, const tetiso::Device& device,
+                              tetiso::StageSeconds* seconds = nullptr) {
+    tetiso::DomainTaskOptions task;
+    task.level = kLevel;
+    task.device = device;
+    tetiso::DomainTaskResult done = tetiso::run_domain_task(lattice, 0, task);
+    if (seconds) *seconds += done.seconds;
+    return std::move(done.piece);
 }
 
 // Runs `extract` (one GPU call) per iteration; counters: sizes and the mean
 // seconds of the call's three stages.
 template <class Extract>
 void time_gpu(benchmark::State& state, const tetiso::Domain& domain, const Extract& extract) {
-    tetiso::Gpu& gpu = gpu_extractor();
+    const tetiso::Device& gpu = gpu_extractor();
     std::int64_t vertices = 0, triangles = 0;
-    tetiso::GpuTimings sum;
+    tetiso::StageSeconds sum;
     for (auto _ : state) {
-        const tetiso::Piece piece = extract(gpu);
+        const tetiso::Piece piece = extract(gpu, &sum);
         vertices = static_cast<std::int64_t>(piece.vertex_count());
         triangles = static_cast<std::int64_t>(piece.triangle_count());
         benchmark::DoNotOptimize(piece.triangles.data());
-        sum.upload += gpu.last_timings().upload;
-        sum.compute += gpu.last_timings().compute;
-        sum.download += gpu.last_timings().download;
     }
     set_size_counters(state, domain, vertices, triangles);
     const auto iterations = static_cast<double>(state.iterations());
     state.counters["upload_s"] = sum.upload / iterations;
-    state.counters["compute_s"] = sum.compute / iterations;
+    state.counters["compute_s"] = sum.extract / iterations;
     state.counters["download_s"] = sum.download / iterations;
 }
 
 void bench_gpu(benchmark::State& state, std::int64_t n) {
     const Problem& p = problem(n);
-    time_gpu(state, p.domain, [&](tetiso::Gpu& gpu) { return gpu.extract(p.domain, kLevel); });
+    time_gpu(state, p.domain, [&](const tetiso::Device& gpu, tetiso::StageSeconds* seconds) {
+        return tetiso::extract(p.domain, kLevel, tetiso::ExtractOptions{1, gpu}, seconds);
+    });
 }
 
 void bench_gpu_lattice(benchmark::State& state, std::int64_t n) {
     const Problem& p = problem(n);
-    const tetiso::Lattice lattice(n);
-    const tetiso::Decomposition one(lattice, 1);
-    const auto field = tetiso::make_field("paper");
-    time_gpu(state, p.domain, [&](tetiso::Gpu& gpu) { return gpu.extract(one, 0, *field, kLevel); });
+    const tetiso::LatticePartition one(n, 1, tetiso::make_field("paper"));
+    time_gpu(state, p.domain, [&](const tetiso::Device& gpu, tetiso::StageSeconds* seconds) {
+        return extract_lattice(one, gpu, seconds);
+    });
 }
 
 // A domain from nothing to its piece, as a job's domain task makes it.
 void bench_domain(benchmark::State& state, std::int64_t n, bool on_gpu) {
     const Problem& p = problem(n);
-    const tetiso::Lattice lattice(n);
-    const tetiso::Decomposition one(lattice, 1);
-    const auto field = tetiso::make_field("paper");
+    const tetiso::LatticePartition one(n, 1, tetiso::make_field("paper"));
     std::int64_t vertices = 0, triangles = 0;
     for (auto _ : state) {
-        const tetiso::Piece piece = on_gpu ? gpu_extractor().extract(one, 0, *field, kLevel)
-                                           : tetiso::extract(one.make_domain(0, *field), kLevel);
+        const tetiso::Piece piece = on_gpu ? extract_lattice(one, gpu_extractor())
+                                           : tetiso::extract(one.make_domain(0), kLevel);
         vertices = static_cast<std::int64_t>(piece.vertex_count());
         triangles = static_cast<std::int64_t>(piece.triangle_count());
         benchmark::DoNotOptimize(piece.triangles.data());

@@ -36,7 +36,8 @@
 #include "bench_main.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/field.hpp"
-#include "tetiso/gpu.hpp"
+#include "tetiso/device.hpp"
+#include "tetiso/domain_task.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/reduce.hpp"
 #include "tetiso/schedule.hpp"
@@ -53,9 +54,32 @@ namespace {
 constexpr const char* kField = "paper";
 bool g_mismatch = false;
 
-tetiso::Gpu* gpu() {
-    static std::unique_ptr<tetiso::Gpu> device =
-        tetiso::gpu_info().available ? std::make_unique<tetiso::Gpu>() : nullptr;
+// The GPU's reduction and domain task, each keeping its call's seconds by stage.
+struct BenchGpu {
+    tetiso::Device device = tetiso::Device::cuda();
+    tetiso::StageSeconds last;
+    const tetiso::StageSeconds& last_timings() const { return last; }
+    std::size_t bytes_held() const { return tetiso::Device::gpu_bytes_held(); }
+    tetiso::Piece reduce(const tetiso::Piece& raw, tetiso::ReduceOptions options,
+                         tetiso::ReduceReport* report = nullptr) {
+        options.device = device;
+        last = {};
+        return tetiso::reduce(raw, options, report, &last);
+    }
+    tetiso::Piece extract_and_reduce(const tetiso::LatticePartition& lattice, int domain, float level,
+                                     const tetiso::ReduceOptions& options) {
+        tetiso::DomainTaskOptions task;
+        task.level = level;
+        task.device = device;
+        task.reduce = options;
+        tetiso::DomainTaskResult done = tetiso::run_domain_task(lattice, domain, task);
+        last = done.seconds;
+        return std::move(done.piece);
+    }
+};
+
+BenchGpu* gpu() {
+    static std::unique_ptr<BenchGpu> device = tetiso::gpu_info().available ? std::make_unique<BenchGpu>() : nullptr;
     return device.get();
 }
 
@@ -114,8 +138,8 @@ void bench_gpu_reduce(benchmark::State& state, std::int64_t n) {
     for (auto _ : state) {
         const tetiso::Piece out = gpu()->reduce(s.raw, s.options, &report);
         benchmark::DoNotOptimize(out.triangles.data());
-        const tetiso::GpuTimings& t = gpu()->last_timings();
-        state.SetIterationTime(t.compute);
+        const tetiso::StageSeconds& t = gpu()->last_timings();
+        state.SetIterationTime(t.reduce);
         upload += t.upload;
         download += t.download;
     }
@@ -167,9 +191,10 @@ tetiso::Piece cpu_domain_task(const tetiso::Decomposition& decomposition, const 
 }
 
 void bench_domain(benchmark::State& state, DomainTask task, bool on_gpu) {
-    const tetiso::Lattice lattice(task.n);
-    const tetiso::Decomposition decomposition(lattice, task.domains);
-    const auto field = tetiso::make_field(kField);
+    const tetiso::LatticePartition partition(task.n, task.domains, tetiso::make_field(kField));
+    const tetiso::Lattice& lattice = partition.lattice();
+    const tetiso::Decomposition& decomposition = partition.decomposition();
+    const tetiso::Field* field = &partition.field();
     tetiso::ReduceOptions options;
     options.max_error = tetiso::JobConfig{}.max_error_spacings * lattice.spacing();
     options.keep_samples = true;
@@ -177,7 +202,7 @@ void bench_domain(benchmark::State& state, DomainTask task, bool on_gpu) {
     static bool checked = false;
     if (on_gpu && !checked) {
         checked = true;
-        tetiso::Piece g = gpu()->extract_and_reduce(decomposition, task.domain, *field, level, options);
+        tetiso::Piece g = gpu()->extract_and_reduce(partition, task.domain, level, options);
         tetiso::keep_samples_near_locked(g, tetiso::JobConfig{}.sample_rings);
         check("domain task", cpu_domain_task(decomposition, task, *field, options), g);
     }
@@ -186,7 +211,7 @@ void bench_domain(benchmark::State& state, DomainTask task, bool on_gpu) {
     for (auto _ : state) {
         tetiso::Piece piece;
         if (on_gpu) {
-            piece = gpu()->extract_and_reduce(decomposition, task.domain, *field, level, options);
+            piece = gpu()->extract_and_reduce(partition, task.domain, level, options);
             tetiso::keep_samples_near_locked(piece, tetiso::JobConfig{}.sample_rings);
             extract += gpu()->last_timings().extract;
             reduce += gpu()->last_timings().reduce;

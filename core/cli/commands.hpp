@@ -10,7 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "tetiso/gpu.hpp"
+#include "tetiso/device.hpp"
 #include "tetiso/io.hpp"
 #include "tetiso/reduce.hpp"
 
@@ -51,12 +51,12 @@ struct DeviceChoice {
 // each task), which is then the default.
 void add_device_options(CLI::App& cmd, DeviceChoice& choice, const std::string& what, bool automatic = false);
 
-// The GPU asked for, or null for the CPU; throws tetiso::Error ("--device
-// gpu: why not") when there is none.
-std::unique_ptr<Gpu> open_gpu(const DeviceChoice& choice);
+// The device asked for; throws tetiso::Error ("--device gpu: why not")
+// when there is no such GPU.
+Device open_device(const DeviceChoice& choice);
 
 // The report's "device": the CPU, or the GPU's name and its seconds by stage.
-nlohmann::json device_json(const Gpu* gpu, const GpuTimings& seconds);
+nlohmann::json device_json(const Device& device, const StageSeconds& seconds);
 
 // The default error bound of a reduction that knows no lattice spacing, as a
 // fraction of the input's mean edge length.

@@ -122,21 +122,21 @@ void add_device_options(CLI::App& cmd, DeviceChoice& choice, const std::string& 
         ->capture_default_str();
 }
 
-std::unique_ptr<Gpu> open_gpu(const DeviceChoice& choice) {
-    if (!choice.on_gpu()) return nullptr;
+Device open_device(const DeviceChoice& choice) {
+    if (!choice.on_gpu()) return Device::host();
     const GpuInfo info = gpu_info(choice.gpu);
     if (!info.available) throw Error("--device gpu: " + info.description);
-    return std::make_unique<Gpu>(choice.gpu);
+    return Device::cuda(choice.gpu);
 }
 
-nlohmann::json device_json(const Gpu* gpu, const GpuTimings& seconds) {
-    if (!gpu) return {{"kind", "cpu"}};
+nlohmann::json device_json(const Device& device, const StageSeconds& seconds) {
+    if (!device.is_gpu()) return {{"kind", "cpu"}};
     return {{"kind", "gpu"},
-            {"index", gpu->device()},
-            {"name", gpu->description()},
+            {"index", device.gpu()},
+            {"name", device.description()},
             {"seconds",
              {{"upload", seconds.upload},
-              {"compute", seconds.compute},
+              {"compute", seconds.extract + seconds.reduce},
               {"download", seconds.download},
               {"extract", seconds.extract},
               {"reduce", seconds.reduce}}}};

@@ -8,8 +8,9 @@
 
 #include "commands.hpp"
 #include "tetiso/error.hpp"
+#include "tetiso/device.hpp"
+#include "tetiso/domain_task.hpp"
 #include "tetiso/extract.hpp"
-#include "tetiso/gpu.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/io.hpp"
 #include "tetiso/lattice.hpp"
@@ -37,57 +38,16 @@ struct ExtractArguments {
     std::filesystem::path report;
 };
 
-// Extracts and reduces on the CPU or, with --device gpu, on one GPU kept
-// for every domain; sums the GPU's seconds by stage for the report.
-class Extractor {
-public:
-    explicit Extractor(const ExtractArguments& args) : threads_(args.threads), gpu_(open_gpu(args.device)) {}
-
-    Piece operator()(const Domain& domain, float level) {
-        if (!gpu_) return extract(domain, level, ExtractOptions{threads_});
-        return count(gpu_->extract(domain, level));
-    }
-
-    // A lattice domain on the GPU, which builds it itself (and evaluates a
-    // built-in field there).
-    Piece operator()(const Decomposition& decomposition, int domain, const Field& field, float level) {
-        return count(gpu_->extract(decomposition, domain, field, level));
-    }
-
-    Piece reduce(const Piece& surface, const ReduceOptions& options, ReduceReport& report) {
-        if (!gpu_) return tetiso::reduce(surface, options, &report);
-        return count(gpu_->reduce(surface, options, &report));
-    }
-
-    bool on_gpu() const { return gpu_ != nullptr; }
-
-    nlohmann::json json() const { return device_json(gpu_.get(), totals_); }
-
-private:
-    Piece count(Piece piece) {
-        const GpuTimings& t = gpu_->last_timings();
-        totals_.upload += t.upload;
-        totals_.compute += t.compute;
-        totals_.download += t.download;
-        totals_.extract += t.extract;
-        totals_.reduce += t.reduce;
-        return piece;
-    }
-
-    int threads_;
-    std::unique_ptr<Gpu> gpu_;
-    GpuTimings totals_;
-};
-
 void run_extract_mesh(const ExtractArguments& args, const Field& field, double start) {
-    Extractor extractor(args);
+    const Device device = open_device(args.device);
+    StageSeconds stage_seconds;
     const double t0 = now_seconds();
     const MeshSource source{args.mesh, args.attribute, args.array, args.node_ids, &field};
     const Domain domain = read_mesh(source);
     const double t1 = now_seconds();
     // An attribute has no level of its own; an analytic field does.
     const double level = args.level.value_or(source.field_from_file() ? 0.0 : field.default_level());
-    Piece surface = extractor(domain, static_cast<float>(level));
+    Piece surface = extract(domain, static_cast<float>(level), ExtractOptions{args.threads, device}, &stage_seconds);
     const double t2 = now_seconds();
     const auto [lo, hi] = std::minmax_element(domain.f.begin(), domain.f.end());
     if (surface.triangle_count() == 0 && lo != domain.f.end()) note_empty_surface(level, *lo, *hi);
@@ -97,7 +57,8 @@ void run_extract_mesh(const ExtractArguments& args, const Field& field, double s
         ReduceOptions options = args.reduce_options;
         options.threads = args.threads;
         options.max_error = args.max_error_spacings * spacing;
-        surface = extractor.reduce(surface, options, reduce_report);
+        options.device = device;
+        surface = reduce(surface, options, &reduce_report, &stage_seconds);
     }
     const double t3 = now_seconds();
     OutputFiles output;
@@ -113,7 +74,7 @@ void run_extract_mesh(const ExtractArguments& args, const Field& field, double s
         {"tets", domain.tet_count()},
         {"mean_edge_length", spacing},
         {"threads", args.threads},
-        {"device", extractor.json()},
+        {"device", device_json(device, stage_seconds)},
         {"vertices", surface.vertex_count()},
         {"triangles", surface.triangle_count()},
         {"output", args.output.string()},
@@ -145,12 +106,18 @@ void run_extract(const ExtractArguments& args) {
         throw Error("--mesh reads one domain; --domains applies to the lattice only");
     if ((args.attribute || !args.array.empty() || !args.node_ids.empty()) && args.mesh.empty())
         throw Error("--attribute, --array and --node-ids need --mesh");
-    const std::unique_ptr<Field> field = make_field(args.field);
-    if (!args.mesh.empty()) return run_extract_mesh(args, *field, start);
-    const Lattice lattice(args.lattice);
-    const Decomposition decomposition(lattice, args.domains);
+    std::unique_ptr<Field> made_field = make_field(args.field);
+    if (!args.mesh.empty()) return run_extract_mesh(args, *made_field, start);
+    const LatticePartition partition(args.lattice, args.domains, std::move(made_field));
+    const Lattice& lattice = partition.lattice();
+    const Decomposition& decomposition = partition.decomposition();
+    const Field* field = &partition.field();
     const double level = args.level.value_or(field->default_level());
-    Extractor extractor(args);
+    DomainTaskOptions task;
+    task.level = static_cast<float>(level);
+    task.device = open_device(args.device);
+    task.threads = args.threads;
+    StageSeconds stage_seconds;
 
     double generate_seconds = 0, extract_seconds = 0;
     float lowest = std::numeric_limits<float>::infinity(), highest = -lowest;
@@ -159,20 +126,15 @@ void run_extract(const ExtractArguments& args) {
     bool range_known = true;
     for (int d = 0; d < decomposition.domain_count(); ++d) {
         const double t0 = now_seconds();
-        if (extractor.on_gpu()) { // the GPU builds the domain itself
-            pieces.push_back(extractor(decomposition, d, *field, static_cast<float>(level)));
-            extract_seconds += now_seconds() - t0;
-            range_known = false;
-            continue;
-        }
-        const Domain domain = decomposition.make_domain(d, *field);
-        const double t1 = now_seconds();
-        pieces.push_back(extractor(domain, static_cast<float>(level)));
-        extract_seconds += now_seconds() - t1;
-        generate_seconds += t1 - t0;
-        const auto [lo, hi] = std::minmax_element(domain.f.begin(), domain.f.end());
-        lowest = std::min(lowest, *lo);
-        highest = std::max(highest, *hi);
+        DomainTaskResult done = run_domain_task(partition, d, task);
+        generate_seconds += done.seconds.generate;
+        extract_seconds += now_seconds() - t0 - done.seconds.generate;
+        stage_seconds += done.seconds;
+        pieces.push_back(std::move(done.piece));
+        // A GPU builds a lattice domain itself: its values stay there.
+        range_known = range_known && done.field_low <= done.field_high;
+        lowest = std::min(lowest, done.field_low);
+        highest = std::max(highest, done.field_high);
     }
     const double t_combine = now_seconds();
     Piece surface = merge_all(std::move(pieces));
@@ -194,7 +156,8 @@ void run_extract(const ExtractArguments& args) {
         ReduceOptions options = args.reduce_options;
         options.threads = args.threads;
         options.max_error = args.max_error_spacings * lattice.spacing();
-        surface = extractor.reduce(surface, options, reduce_report);
+        options.device = task.device;
+        surface = reduce(surface, options, &reduce_report, &stage_seconds);
     }
     const double t_write = now_seconds();
     OutputFiles output;
@@ -212,7 +175,7 @@ void run_extract(const ExtractArguments& args) {
             {"nodes", lattice.node_count()},
             {"tets", lattice.tet_count()},
             {"threads", args.threads},
-            {"device", extractor.json()},
+            {"device", device_json(task.device, stage_seconds)},
             {"vertices", surface.vertex_count()},
             {"triangles", surface.triangle_count()},
             {"output", args.output.string()},

@@ -68,9 +68,10 @@ void run_reduce(const ReduceArguments& args) {
     surface_format(args.output);
     require_writable(args.output);
     if (!args.report.empty()) require_writable(args.report);
-    const std::unique_ptr<Gpu> gpu = open_gpu(args.device);
+    const Device device = open_device(args.device);
     const Piece input = read_piece(args.input);
     ReduceOptions options = args.options;
+    options.device = device;
     // Without a lattice spacing to relate to, bound the error by a fraction
     // of the input's own edge length (marching-tets edges are about 0.6 h).
     options.max_error = args.max_error.value_or(kAutoErrorPerEdgeLength * mean_edge_length(input));
@@ -86,7 +87,8 @@ void run_reduce(const ReduceArguments& args) {
                          static_cast<long long>(over), args.input.string().c_str(), options.max_error);
     }
     ReduceReport report;
-    const Piece output = gpu ? gpu->reduce(input, options, &report) : reduce(input, options, &report);
+    StageSeconds seconds;
+    const Piece output = reduce(input, options, &report, &seconds);
     OutputFiles files;
     write_piece(output, args.output, files);
     if (!args.report.empty()) {
@@ -97,7 +99,7 @@ void run_reduce(const ReduceArguments& args) {
         json["phi"] = options.phi;
         json["max_error"] = options.max_error;
         json["threads"] = options.threads;
-        json["device"] = device_json(gpu.get(), gpu ? gpu->last_timings() : GpuTimings{});
+        json["device"] = device_json(device, seconds);
         json["total_seconds"] = now_seconds() - start;
         write_report(json, args.report, files);
     }

@@ -66,6 +66,14 @@ __global__ void __launch_bounds__(cuda::kBlock, 3)
         function(i);
 }
 
+// An index's count for a scan of n + 1 entries: count(i), 0 at n.
+template <class Count>
+struct IndexSum {
+    Count count;
+    std::int64_t n;
+    __host__ __device__ std::uint32_t operator()(std::int64_t i) const { return i < n ? count(i) : 0u; }
+};
+
 // With TETISO_GPU_PROFILE set, every primitive waits for the device before
 // and after it and adds its seconds to its call site's line of a table,
 // printed to stderr when the backend goes: where a driver's time goes on
@@ -468,6 +476,65 @@ public:
 
     void sync(const char* file = __builtin_FILE(), int line = __builtin_LINE()) const {
         const Timed timed(*this, "sync", file, line); cuda::check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize"); }
+
+    // The primitives marching tetrahedra adds (marching_tets.hpp; see
+    // HostExec's).
+
+    template <class Count>
+    u64 exclusive_sum(i64 n, const Count& count, Array<u32>& offsets, const char* file = __builtin_FILE(),
+                      int line = __builtin_LINE()) {
+        const Timed timed(*this, "exclusive_sum", file, line);
+        offsets.resize(static_cast<std::size_t>(n) + 1);
+        const auto in = thrust::make_transform_iterator(thrust::counting_iterator<i64>(0),
+                                                        cuda_exec::IndexSum<Count>{count, n});
+        std::size_t bytes = 0;
+        cuda::check(cub::DeviceScan::ExclusiveSum(nullptr, bytes, in, offsets.data(), n + 1, stream_), "scan");
+        cuda::check(cub::DeviceScan::ExclusiveSum(temp(bytes), bytes, in, offsets.data(), n + 1, stream_), "scanning");
+        return get(offsets, n);
+    }
+
+    i64 sort_unique(Array<u64>& keys, i64 n, int bits, Array<u64>& out, const char* file = __builtin_FILE(),
+                    int line = __builtin_LINE()) {
+        const Timed timed(*this, "sort_unique", file, line);
+        out.resize(static_cast<std::size_t>(n));
+        if (n == 0) return 0;
+        sorted_wide_keys_.resize(static_cast<std::size_t>(n));
+        std::size_t bytes = 0;
+        cuda::check(cub::DeviceRadixSort::SortKeys(nullptr, bytes, keys.data(), sorted_wide_keys_.data(), n, 0, bits,
+                                                   stream_),
+                    "sort");
+        cuda::check(cub::DeviceRadixSort::SortKeys(temp(bytes), bytes, keys.data(), sorted_wide_keys_.data(), n, 0,
+                                                   bits, stream_),
+                    "sorting keys");
+        i64* kept = scalars_.data();
+        bytes = 0;
+        cuda::check(cub::DeviceSelect::Unique(nullptr, bytes, sorted_wide_keys_.data(), out.data(), kept, n, stream_),
+                    "unique");
+        cuda::check(cub::DeviceSelect::Unique(temp(bytes), bytes, sorted_wide_keys_.data(), out.data(), kept, n,
+                                              stream_),
+                    "dropping repeated keys");
+        const i64 count = read(kept);
+        out.resize(static_cast<std::size_t>(count));
+        return count;
+    }
+
+    void order_by_key(const Array<u64>& keys, i64 n, Array<i32>& order, const char* file = __builtin_FILE(),
+                      int line = __builtin_LINE()) {
+        const Timed timed(*this, "order_by_key", file, line);
+        order.resize(static_cast<std::size_t>(n));
+        if (n == 0) return;
+        sort_values_.resize(static_cast<std::size_t>(n));
+        sorted_wide_keys_.resize(static_cast<std::size_t>(n));
+        i32* values = sort_values_.data();
+        cuda::for_each(stream_, n, [=] __device__(i64 i) { values[i] = static_cast<i32>(i); });
+        std::size_t bytes = 0;
+        cuda::check(cub::DeviceRadixSort::SortPairs(nullptr, bytes, keys.data(), sorted_wide_keys_.data(), values,
+                                                    order.data(), n, 0, 64, stream_),
+                    "sort");
+        cuda::check(cub::DeviceRadixSort::SortPairs(temp(bytes), bytes, keys.data(), sorted_wide_keys_.data(), values,
+                                                    order.data(), n, 0, 64, stream_),
+                    "ordering by key");
+    }
 
 private:
     static constexpr int kScalars = 4;

@@ -220,7 +220,100 @@ struct HostExec {
 
     void sync() const {}
 
+    // The primitives marching tetrahedra adds (marching_tets.hpp).
+
+    // offsets[i] = count(0) + ... + count(i-1) for i <= n, a total below
+    // 2^32; returns the total. count runs twice per element on several
+    // threads (sum, then write), so it must be cheap and pure.
+    template <class Count>
+    std::uint64_t exclusive_sum(i64 n, const Count& count, Array<std::uint32_t>& offsets) const {
+        offsets.resize(static_cast<std::size_t>(n) + 1);
+        const parallel::Blocks blocks(threads, n);
+        std::vector<std::uint64_t> start(static_cast<std::size_t>(blocks.count) + 1, 0);
+        const int block_threads = blocks.parallel() ? threads : 1;
+        parallel::for_each(block_threads, blocks.count, [&](i64 b) {
+            std::uint64_t sum = 0;
+            for (i64 i = blocks.begin(b); i < blocks.begin(b + 1); ++i) sum += count(i);
+            start[static_cast<std::size_t>(b) + 1] = sum;
+        }, 0);
+        for (std::size_t b = 0; b < static_cast<std::size_t>(blocks.count); ++b) start[b + 1] += start[b];
+        std::uint32_t* out = offsets.data();
+        parallel::for_each(block_threads, blocks.count, [&](i64 b) {
+            std::uint64_t sum = start[static_cast<std::size_t>(b)];
+            for (i64 i = blocks.begin(b); i < blocks.begin(b + 1); ++i) {
+                out[i] = static_cast<std::uint32_t>(sum);
+                sum += count(i);
+            }
+        }, 0);
+        const std::uint64_t total = start.back();
+        out[n] = static_cast<std::uint32_t>(total);
+        return total;
+    }
+
+    // out = the distinct values of keys[0, n), ascending; every key is below
+    // 2^bits. keys is left in an unspecified order. Returns their number.
+    i64 sort_unique(Array<std::uint64_t>& keys, i64 n, int bits, Array<std::uint64_t>& out) {
+        out.resize(static_cast<std::size_t>(n));
+        if (n == 0) return 0;
+        radix_sort_keys(keys, n, bits, out);
+        std::uint64_t* k = keys.data();
+        std::uint64_t* o = out.data();
+        i64 kept = 0;
+        for (i64 i = 0; i < n; ++i)
+            if (i == 0 || k[i] != k[i - 1]) o[kept++] = k[i];
+        out.resize(static_cast<std::size_t>(kept));
+        return kept;
+    }
+
+    // order = 0 .. n-1 by ascending keys[i], stably.
+    void order_by_key(const Array<std::uint64_t>& keys, i64 n, Array<i32>& order) const {
+        order.resize(static_cast<std::size_t>(n));
+        for (i64 i = 0; i < n; ++i) order[static_cast<std::size_t>(i)] = static_cast<i32>(i);
+        std::stable_sort(order.begin(), order.end(), [&](i32 a, i32 b) {
+            return keys[static_cast<std::size_t>(a)] < keys[static_cast<std::size_t>(b)];
+        });
+    }
+
 private:
+    // keys[0, n) sorted by their low `bits` bits (the rest 0), by an LSD
+    // radix sort whose blocks count and scatter on their own threads;
+    // spare: a buffer of n.
+    void radix_sort_keys(Array<std::uint64_t>& keys, i64 count, int bits, Array<std::uint64_t>& spare) const {
+        constexpr int kDigitBits = 11;
+        constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
+        const auto n = static_cast<std::size_t>(count);
+        spare.resize(n);
+        const parallel::Blocks split(threads, count);
+        const auto blocks = static_cast<std::size_t>(split.count);
+        const int block_threads = split.parallel() ? threads : 1;
+        std::vector<std::uint32_t> histogram(blocks * kBuckets);
+        for (int shift = 0; shift < bits; shift += kDigitBits) {
+            const std::uint64_t* from = keys.data();
+            std::uint64_t* to = spare.data();
+            const auto digit = [&](std::uint64_t k) { return static_cast<std::size_t>((k >> shift) & (kBuckets - 1)); };
+            parallel::for_each(block_threads, split.count, [&](i64 b) {
+                std::uint32_t* c = histogram.data() + static_cast<std::size_t>(b) * kBuckets;
+                std::fill(c, c + kBuckets, 0u);
+                for (i64 i = split.begin(b); i < split.begin(b + 1); ++i) ++c[digit(from[i])];
+            }, 0);
+            std::size_t shared = 0;
+            for (std::size_t b = 0; b < blocks; ++b) shared += histogram[b * kBuckets + digit(from[0])];
+            if (shared == n) continue;
+            std::uint32_t sum = 0;
+            for (std::size_t bucket = 0; bucket < kBuckets; ++bucket)
+                for (std::size_t b = 0; b < blocks; ++b) {
+                    const std::uint32_t here = histogram[b * kBuckets + bucket];
+                    histogram[b * kBuckets + bucket] = sum;
+                    sum += here;
+                }
+            parallel::for_each(block_threads, split.count, [&](i64 b) {
+                std::uint32_t* c = histogram.data() + static_cast<std::size_t>(b) * kBuckets;
+                for (i64 i = split.begin(b); i < split.begin(b + 1); ++i) to[c[digit(from[i])]++] = from[i];
+            }, 0);
+            keys.swap(spare);
+        }
+    }
+
     // From this many operations a sort by priority runs on several threads
     // (below it, one thread sorts in a millisecond or less).
     static constexpr i64 kParallelSortMin = i64{1} << 16;

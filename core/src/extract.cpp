@@ -1,6 +1,8 @@
-// Marching tetrahedra over one domain (paper, section "Isosurface generation
-// algorithm", steps 1-6), written as a few data-parallel passes over flat
-// arrays so that the same passes map onto Thrust/CUDA:
+// Marching tetrahedra over one domain on the host (paper, section
+// "Isosurface generation algorithm", steps 1-6). The passes every backend
+// shares are marching_tets.hpp's; the host keeps a numbering of its own,
+// fused with the march, since on the host it is several times faster than
+// sorting the crossing edges (bench_extract):
 //
 //   1. classify   node -> above (f >= level; equality counts as above, so the
 //                 classification of a node never depends on its domain);
@@ -17,19 +19,24 @@
 //   5. connect    slot codes are replaced by vertex numbers.
 //
 // A node with more than 8 higher crossing neighbours (possible in unstructured
-// meshes, never in the lattice) sends the whole domain through a sort-based
-// numbering that gives the same result.
+// meshes, never in the lattice) sends the whole domain through the shared
+// passes, which number by sorting and give the same result. A CUDA Device in
+// the options sends the domain to extract_gpu.cu, which runs the shared passes.
 #include "tetiso/extract.hpp"
 
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "device_entry.hpp"
+#include "exec_host.hpp"
 #include "extract_rules.hpp"
+#include "marching_tets.hpp"
 #include "parallel.hpp"
 #include "tetiso/error.hpp"
 
@@ -133,42 +140,30 @@ void resize_vertices(Piece& piece, std::size_t n) {
     piece.flags.resize(n);
 }
 
-// The fallback numbering: all crossing edges sorted and made unique. Used
-// only when a bucket overflows, so it favours simplicity over speed.
-Piece extract_by_sorting(const Domain& domain, float level, const std::vector<std::uint8_t>& above) {
-    std::vector<std::uint64_t> edges;
-    std::vector<std::uint64_t> corners;
-    for (std::size_t t = 0; t < domain.tet_count(); ++t) {
-        const std::int32_t* v = domain.tets.data() + 4 * t;
-        const unsigned pattern = above[static_cast<std::size_t>(v[0])] | (above[static_cast<std::size_t>(v[1])] << 1) |
-                                 (above[static_cast<std::size_t>(v[2])] << 2) |
-                                 (above[static_cast<std::size_t>(v[3])] << 3);
-        if (pattern == 0 || pattern == 15) continue;
-        const MarchCase& c = kCases[pattern];
-        std::uint64_t e[4];
-        EdgeKey order[4];
-        for (int k = 0; k < c.crossings; ++k) {
-            const std::int32_t a = v[kEdgesOfTet[c.edge[static_cast<std::size_t>(k)]][0]];
-            const std::int32_t b = v[kEdgesOfTet[c.edge[static_cast<std::size_t>(k)]][1]];
-            e[k] = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
-            order[k] = edge_key(domain.gid[static_cast<std::size_t>(a)], domain.gid[static_cast<std::size_t>(b)]);
-            edges.push_back(e[k]);
-        }
-        std::uint64_t emitted[6];
-        const int n = extract_rules::emit_triangles(c.crossings, e, order, emitted);
-        corners.insert(corners.end(), emitted, emitted + n);
-    }
-    std::sort(edges.begin(), edges.end());
-    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+template <class T, class Allocator>
+void copy_out(const T* from, std::size_t n, std::vector<T, Allocator>& to) {
+    to.assign(from, from + n);
+}
+
+// The fallback: the passes every backend shares (marching_tets.hpp), whose
+// numbering sorts the crossing edges instead of bucketing them. Used only
+// when a bucket overflows.
+Piece extract_by_passes(const Domain& domain, float level, int threads) {
+    HostExec exec;
+    exec.threads = threads;
+    marching::Arrays<HostExec> arrays;
+    const marching::Surface s =
+        marching::march(exec, arrays, node_view(domain), static_cast<std::int64_t>(domain.node_count()),
+                        marching::TetArray{domain.tets.data()}, static_cast<std::int64_t>(domain.tet_count()), level,
+                        domain.id);
     Piece piece;
-    resize_vertices(piece, edges.size());
-    for (std::size_t i = 0; i < edges.size(); ++i)
-        place_vertex(node_view(domain), level, static_cast<std::int32_t>(edges[i] >> 32),
-                     static_cast<std::int32_t>(edges[i] & 0xffffffffu), piece, i);
-    piece.triangles.resize(corners.size());
-    for (std::size_t i = 0; i < corners.size(); ++i)
-        piece.triangles[i] =
-            static_cast<std::int32_t>(std::lower_bound(edges.begin(), edges.end(), corners[i]) - edges.begin());
+    const auto nv = static_cast<std::size_t>(s.vertices);
+    copy_out(s.x, nv, piece.x);
+    copy_out(s.y, nv, piece.y);
+    copy_out(s.z, nv, piece.z);
+    copy_out(s.key, nv, piece.key);
+    copy_out(s.flags, nv, piece.flags);
+    copy_out(s.triangles, 3 * static_cast<std::size_t>(s.triangle_count), piece.triangles);
     return piece;
 }
 
@@ -196,11 +191,12 @@ void extract_rules::check_domain(const Domain& domain) {
     }
 }
 
-Piece extract(const Domain& domain, float level, const ExtractOptions& options) {
+namespace {
+
+Piece extract_on_host(const Domain& domain, float level, int threads) {
     extract_rules::check_domain(domain);
     const std::size_t nodes = domain.node_count();
     const std::size_t tets = domain.tet_count();
-    const int threads = parallel::resolve_threads(options.threads);
     extract_rules::check_level(level);
 
     // 1. classify
@@ -237,7 +233,7 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
     }
     Piece piece;
     if (overflow) {
-        piece = extract_by_sorting(domain, level, above);
+        piece = extract_by_passes(domain, level, threads);
     } else {
         // 3. number: vertices of node v are first[v] .. first[v] + filled(v) - 1
         std::vector<std::int32_t> first(nodes + 1, 0);
@@ -287,6 +283,17 @@ Piece extract(const Domain& domain, float level, const ExtractOptions& options) 
     if (!order_by_key(piece))
         throw InternalError(domain_name(domain.id) + ": two vertices of the surface share a key");
     piece.domains = {domain.id};
+    return piece;
+}
+
+} // namespace
+
+Piece extract(const Domain& domain, float level, const ExtractOptions& options, StageSeconds* seconds) {
+    const int threads = parallel::resolve_threads(options.threads); // checked whatever the device
+    if (options.device.is_gpu()) return on_gpu::extract(options.device.state(), domain, level, nullptr, nullptr, seconds);
+    const auto start = std::chrono::steady_clock::now();
+    Piece piece = extract_on_host(domain, level, threads);
+    if (seconds) seconds->extract += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return piece;
 }
 

@@ -1,4 +1,4 @@
-// What the CPU (extract.cpp) and GPU (extract_gpu.cu) extractions must agree
+// What marching tetrahedra on every backend (extract.cpp, marching_tets.hpp) must agree
 // on bit for bit, written once: the marching-tetrahedra case table, the
 // placement of a crossing, the quad's split, the checks of a domain and their
 // messages. The arithmetic functions compile for the host and the device;
@@ -179,7 +179,7 @@ TETISO_HD inline CrossingVertex place_crossing(const NodeView& node, std::size_t
     return v;
 }
 
-// The most nodes a domain may have: the CPU's buckets (8 slots per node) are
+// The most nodes a domain may have: the host's buckets (8 slots per node) are
 // addressed by int32.
 inline constexpr int kBucket = 8;
 

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "tetiso/error.hpp"
-#include "tetiso/gpu.hpp"
+#include "tetiso/device.hpp"
 
 namespace tetiso {
 

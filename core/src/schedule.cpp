@@ -10,8 +10,8 @@
 
 #include "tetiso/placement.hpp"
 #include "tetiso/error.hpp"
-#include "tetiso/extract.hpp"
-#include "tetiso/gpu.hpp"
+#include "tetiso/device.hpp"
+#include "tetiso/domain_task.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/mesh_partition.hpp"
 #include "tetiso/mesh_split.hpp"
@@ -132,67 +132,22 @@ Job::Job(const JobConfig& config) : config_(config) {
 
 Job::~Job() = default;
 
-Gpu& Job::gpu(int index) const {
-    std::unique_ptr<Gpu>& made = gpus_[index];
-    if (!made) made = std::make_unique<Gpu>(index);
-    return *made;
+const Device& Job::gpu(int index) const {
+    Device& made = gpus_[index];
+    if (!made.is_gpu()) made = Device::cuda(index);
+    return made;
 }
 
 void Job::prepare_gpu(int index) const {
     // The paper's field on a lattice of 24^3 nodes in one domain: every
     // kernel of a domain task runs, in a few milliseconds once loaded.
-    const Lattice lattice(24);
-    const Decomposition one(lattice, 1);
-    const auto field = make_field("paper");
-    ReduceOptions options = reduce_options_;
-    options.keep_samples = true;
-    gpu(index).extract_and_reduce(one, 0, *field, static_cast<float>(field->default_level()), options);
-}
-
-Piece Job::execute_on_gpu(int domain, int gpu_index, TaskRecord& record, const ReduceOptions& options) const {
-    Gpu& gpu = this->gpu(gpu_index);
-    const auto* lattice = dynamic_cast<const LatticePartition*>(partition_.get());
-    const auto start = std::chrono::steady_clock::now();
-    Piece piece;
-    ReduceReport report;
-    double reduce_seconds = 0; // a piece reduced by the host's rules around pinches
-    std::size_t extracted = 0;
-    if (lattice && !config_.reduce) {
-        piece = gpu.extract(lattice->decomposition(), domain, lattice->field(), level_);
-    } else if (lattice) {
-        piece = gpu.extract_and_reduce(lattice->decomposition(), domain, lattice->field(), level_, options, &report);
-    } else {
-        const Domain d = partition_->make_domain(domain);
-        record.stages.generate = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (!config_.reduce) {
-            piece = gpu.extract(d, level_);
-        } else if (partition_->pieces_are_manifold()) {
-            piece = gpu.extract_and_reduce(d, level_, options, &report);
-        } else {
-            piece = gpu.extract(d, level_);
-            extracted = piece.triangle_count();
-            const auto t = std::chrono::steady_clock::now();
-            const GpuTimings extraction = gpu.last_timings();
-            piece = reduce_piece(piece, options, &report, [&gpu](const Piece& p, const ReduceOptions& o, ReduceReport* r) {
-                return gpu.reduce(p, o, r);
-            });
-            reduce_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-            record.stages.upload = extraction.upload;
-            record.stages.extract = extraction.extract;
-            record.stages.download = extraction.download;
-            record.stages.reduce = reduce_seconds;
-        }
-    }
-    if (reduce_seconds == 0) {
-        const GpuTimings& t = gpu.last_timings();
-        record.stages.upload = t.upload;
-        record.stages.extract = t.extract;
-        record.stages.reduce = t.reduce;
-        record.stages.download = t.download;
-    }
-    record.stages.gpu = gpu.device();
-    record.triangles_in = extracted > 0 ? extracted : config_.reduce ? report.triangles_in : piece.triangle_count();
-    return piece;
+    const LatticePartition one(24, 1, make_field("paper"));
+    DomainTaskOptions options;
+    options.level = static_cast<float>(one.field().default_level());
+    options.device = gpu(index);
+    options.reduce = reduce_options_;
+    options.reduce->keep_samples = true;
+    run_domain_task(one, 0, options);
 }
 
 std::string Job::describe(int task) const {
@@ -210,47 +165,30 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
     record.domain_count = n.count;
     record.threads = threads.count;
     using clock = std::chrono::steady_clock;
-    auto t0 = clock::now();
-    auto lap = [&t0] {
-        const auto t1 = clock::now();
-        const double s = std::chrono::duration<double>(t1 - t0).count();
-        t0 = t1;
-        return s;
-    };
-    const int gpu = threads.gpu ? *threads.gpu : config_.device == JobConfig::Device::gpu ? config_.gpu : -1;
-    if (n.count == 1 && gpu >= 0) {
-        ReduceOptions options = reduce_options(threads);
-        options.keep_samples = true;
-        Piece piece = execute_on_gpu(n.first, gpu, record, options);
-        if (config_.reduce) keep_samples_near_locked(piece, config_.sample_rings);
-        record.triangles_out = piece.triangle_count();
-        record.samples_out = piece.sample_count();
-        return piece;
-    }
     if (n.count == 1) {
-        Piece piece;
-        {
-            const Domain domain = partition_->make_domain(n.first);
-            record.stages.generate = lap();
-            if (!domain.f.empty()) {
-                const auto [low, high] = std::minmax_element(domain.f.begin(), domain.f.end());
-                record.field_low = *low;
-                record.field_high = *high;
-            }
-            piece = extract(domain, level_, ExtractOptions{threads.count});
-        } // the tetrahedra go before the reduction needs its memory
-        record.stages.extract = lap();
-        record.triangles_in = piece.triangle_count();
+        const int gpu_index = threads.gpu ? *threads.gpu : config_.device == JobConfig::Device::gpu ? config_.gpu : -1;
+        DomainTaskOptions options;
+        options.level = level_;
+        if (gpu_index >= 0) options.device = gpu(gpu_index);
+        options.threads = threads.count;
         if (config_.reduce) {
-            ReduceOptions options = reduce_options(threads);
-            options.keep_samples = true;
-            piece = partition_->pieces_are_manifold() ? reduce(piece, options) : reduce_piece(piece, options);
-            keep_samples_near_locked(piece, config_.sample_rings);
+            options.reduce = reduce_options(threads);
+            options.reduce->keep_samples = true;
         }
-        record.stages.reduce = lap();
-        record.triangles_out = piece.triangle_count();
-        record.samples_out = piece.sample_count();
-        return piece;
+        DomainTaskResult done = run_domain_task(*partition_, n.first, options);
+        if (config_.reduce) {
+            const auto start = clock::now();
+            keep_samples_near_locked(done.piece, config_.sample_rings);
+            done.seconds.reduce += std::chrono::duration<double>(clock::now() - start).count();
+        }
+        static_cast<StageSeconds&>(record.stages) = done.seconds;
+        record.stages.gpu = gpu_index;
+        record.field_low = done.field_low;
+        record.field_high = done.field_high;
+        record.triangles_in = done.triangles_extracted;
+        record.triangles_out = done.piece.triangle_count();
+        record.samples_out = done.piece.sample_count();
+        return std::move(done.piece);
     }
     if (!left || !right) throw Error("seam task " + std::to_string(task) + " lacks a piece");
     record.triangles_in = left->triangle_count() + right->triangle_count();

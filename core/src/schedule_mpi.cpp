@@ -37,7 +37,7 @@
 #include "byte_buffer.hpp"
 #include "tetiso/placement.hpp"
 #include "tetiso/error.hpp"
-#include "tetiso/gpu.hpp"
+#include "tetiso/device.hpp"
 
 namespace tetiso {
 namespace {

@@ -14,7 +14,7 @@
 #include "tetiso/reduce.hpp"
 
 #ifdef TETISO_TEST_GPU
-#include "tetiso/gpu.hpp"
+#include "tetiso/device.hpp"
 #endif
 
 namespace tetiso::test {
@@ -23,8 +23,8 @@ namespace tetiso::test {
 
 // One GPU for the whole program: its buffers serve every case in turn, as a
 // worker's serve its tasks.
-inline Gpu& the_gpu() {
-    static Gpu gpu;
+inline const Device& the_gpu() {
+    static const Device gpu = Device::cuda();
     return gpu;
 }
 
@@ -53,7 +53,9 @@ inline Piece reduce_under_test(const Piece& in, const ReduceOptions& options = {
         cpu_error = e.what();
     }
     try {
-        gpu = the_gpu().reduce(in, options, &gpu_report);
+        ReduceOptions on_gpu = options;
+        on_gpu.device = the_gpu();
+        gpu = reduce(in, on_gpu, &gpu_report);
     } catch (const Error& e) {
         gpu_error = e.what();
     }

@@ -1,19 +1,30 @@
 // Marching tetrahedra: closed surfaces of the right topology and size, every
 // vertex on its mesh edge at the level, pieces of any decomposition fitting
-// together exactly, and output independent of the thread count.
+// together exactly, and output independent of the thread count. Built again
+// for the GPU (test_extract_gpu): every extraction here then runs on both
+// devices, which must give the same bytes and errors (extract_under_test.hpp).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
+#include <functional>
+#include <limits>
 #include <numbers>
 #include <numeric>
 #include <random>
 
+#include "extract_under_test.hpp"
 #include "test_support.hpp"
 #include "tetiso/check.hpp"
+#include "tetiso/device.hpp"
 #include "tetiso/error.hpp"
+#include "tetiso/mesh_partition.hpp"
+#include "tetiso/tetgen.hpp"
 
 namespace tetiso {
 namespace {
 
+using test::extract_under_test;
 using test::lattice_surface;
 
 TEST(Extract, SphereIsOneClosedOrientedGenusZeroComponentOfTheRightArea) {
@@ -101,7 +112,7 @@ TEST(Extract, LockedVerticesAreExactlyThoseOnSharedEdges) {
     const auto field = make_field("gyroid");
     std::size_t locked = 0;
     for (int d = 0; d < decomposition.domain_count(); ++d) {
-        const Piece piece = extract(decomposition.make_domain(d, *field), 0.0f);
+        const Piece piece = extract_under_test(decomposition.make_domain(d, *field), 0.0f);
         EXPECT_EQ(piece.domains, std::vector<int>{d});
         for (std::size_t v = 0; v < piece.vertex_count(); ++v) {
             const auto holders = decomposition.domains_of_edge(edge_key_low(piece.key[v]), edge_key_high(piece.key[v]));
@@ -152,8 +163,8 @@ TEST(Extract, OutputDoesNotDependOnThreadCount) {
     const Lattice lattice(60);
     const Decomposition one(lattice, 1);
     const Domain domain = one.make_domain(0, *make_field("paper"));
-    const Piece serial = extract(domain, 0.5f, ExtractOptions{1});
-    const Piece parallel = extract(domain, 0.5f, ExtractOptions{2});
+    const Piece serial = extract_under_test(domain, 0.5f, ExtractOptions{1});
+    const Piece parallel = extract_under_test(domain, 0.5f, ExtractOptions{2});
     EXPECT_EQ(serial.key, parallel.key);
     EXPECT_TRUE(test::same_bits(serial.x, parallel.x));
     EXPECT_TRUE(test::same_bits(serial.y, parallel.y));
@@ -168,13 +179,13 @@ TEST(Extract, UnstructuredNodeOrderGivesTheSameSurface) {
     const Lattice lattice(16);
     const Decomposition one(lattice, 1);
     const Domain domain = one.make_domain(0, *make_field("gyroid"));
-    const Piece reference = extract(domain, 0.0f);
+    const Piece reference = extract_under_test(domain, 0.0f);
 
     std::vector<std::int32_t> order(domain.node_count());
     std::iota(order.begin(), order.end(), 0);
     std::mt19937 random(7);
     std::shuffle(order.begin(), order.end(), random);
-    EXPECT_TRUE(test::same_surface(reference, extract(test::renumbered(domain, order), 0.0f)));
+    EXPECT_TRUE(test::same_surface(reference, extract_under_test(test::renumbered(domain, order), 0.0f)));
 
     // A tiny sphere around one node, numbered first: all 14 of its edges
     // cross and go into one bucket of 8.
@@ -185,8 +196,8 @@ TEST(Extract, UnstructuredNodeOrderGivesTheSameSurface) {
         std::min_element(small.f.begin(), small.f.end()) - small.f.begin());
     std::iota(order.begin(), order.end(), 0);
     std::swap(order[0], order[static_cast<std::size_t>(centre)]);
-    const Piece plain = extract(small, level);
-    const Piece overflowed = extract(test::renumbered(small, order), level);
+    const Piece plain = extract_under_test(small, level);
+    const Piece overflowed = extract_under_test(test::renumbered(small, order), level);
     EXPECT_EQ(plain.vertex_count(), 14u);
     EXPECT_TRUE(test::same_surface(plain, overflowed));
 }
@@ -203,10 +214,10 @@ TEST(Extract, ThreadCountsAboveTheLimitAreRefused) {
     const Lattice lattice(6); // Decomposition keeps a reference to it
     const Decomposition one(lattice, 1);
     const Domain domain = one.make_domain(0, *make_field("sphere"));
-    EXPECT_NO_THROW(extract(domain, 2.0f, ExtractOptions{2}));
+    EXPECT_NO_THROW(extract_under_test(domain, 2.0f, ExtractOptions{2}));
     for (const int threads : {kMaxThreads + 1, 50000, 100000}) {
         try {
-            extract(domain, 2.0f, ExtractOptions{threads});
+            extract_under_test(domain, 2.0f, ExtractOptions{threads});
             ADD_FAILURE() << threads << " threads were accepted";
         } catch (const Error& e) {
             EXPECT_NE(std::string(e.what()).find("at most " + std::to_string(kMaxThreads)), std::string::npos) << e.what();
@@ -220,16 +231,138 @@ TEST(Extract, BadDomainsAreRefusedWithAClearError) {
     Domain domain = one.make_domain(0, *make_field("paper"));
     Domain nan = domain;
     nan.f[5] = std::numeric_limits<float>::quiet_NaN();
-    EXPECT_THROW(extract(nan, 0.5f), Error);
+    EXPECT_THROW(extract_under_test(nan, 0.5f), Error);
     Domain dangling = domain;
     dangling.tets[7] = static_cast<std::int32_t>(domain.node_count());
     try {
-        extract(dangling, 0.5f);
+        extract_under_test(dangling, 0.5f);
         FAIL() << "a tetrahedron with a missing node was accepted";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("tetrahedron 1"), std::string::npos) << e.what();
     }
 }
+
+
+// Keys ascending and unique, every triangle naming three distinct vertices
+// that exist: what the reduction and the seams rely on.
+::testing::AssertionResult well_formed(const Piece& piece) {
+    for (std::size_t v = 1; v < piece.vertex_count(); ++v)
+        if (!(piece.key[v - 1] < piece.key[v])) return ::testing::AssertionFailure() << "keys out of order at " << v;
+    const auto n = static_cast<std::int32_t>(piece.vertex_count());
+    for (std::size_t t = 0; t < piece.triangle_count(); ++t) {
+        const std::int32_t a = piece.triangles[3 * t], b = piece.triangles[3 * t + 1], c = piece.triangles[3 * t + 2];
+        if (a < 0 || b < 0 || c < 0 || a >= n || b >= n || c >= n || a == b || b == c || a == c)
+            return ::testing::AssertionFailure() << "triangle " << t << " is not three vertices";
+    }
+    return ::testing::AssertionSuccess();
+}
+
+// The lattice's connectivity with random values, a tenth of them exactly at
+// the level: every case pattern and every tie.
+TEST(Extract, RandomValuesGiveWellFormedPieces) {
+    const Lattice lattice(24);
+    const Decomposition one(lattice, 1);
+    Domain domain = one.make_domain(0, *make_field("paper"));
+    for (unsigned seed = 1; seed <= 5; ++seed) {
+        std::mt19937 random(seed);
+        std::uniform_real_distribution<float> value(-1.0f, 1.0f);
+        const float level = seed == 1 ? 0.0f : value(random) * 0.5f;
+        for (float& f : domain.f) f = random() % 10 == 0 ? level : value(random);
+        const Piece piece = extract_under_test(domain, level);
+        EXPECT_GT(piece.triangle_count(), 0u) << "seed " << seed;
+        EXPECT_TRUE(well_formed(piece)) << "seed " << seed;
+    }
+}
+
+// The unstructured cube mesh in 8 domains by the octant of each
+// tetrahedron's centroid: interface vertices are locked through the shared
+// edge lists, and local numbering is not global.
+TEST(Extract, UnstructuredDomainsLockTheirSharedEdges) {
+    const auto field = make_field("sphere");
+    Domain mesh = read_tetgen(TetgenSource{std::filesystem::path(TETISO_MESHES_DIR) / "cube.1", std::nullopt,
+                                           field.get()});
+    std::vector<std::int32_t> part(mesh.tet_count());
+    for (std::size_t t = 0; t < part.size(); ++t) {
+        int octant = 0;
+        for (int axis = 0; axis < 3; ++axis) {
+            double centre = 0.0;
+            for (int k = 0; k < 4; ++k) {
+                const auto v = static_cast<std::size_t>(mesh.tets[4 * t + static_cast<std::size_t>(k)]);
+                centre += axis == 0 ? mesh.x[v] : (axis == 1 ? mesh.y[v] : mesh.z[v]);
+            }
+            octant |= (centre / 4 > 2.5 ? 1 : 0) << axis;
+        }
+        part[t] = octant;
+    }
+    const MeshPartition partition(std::move(mesh), part, "octants");
+    std::size_t locked = 0;
+    for (const float level : {2.0f, 1.0f}) {
+        for (int d = 0; d < partition.domain_count(); ++d) {
+            const Piece piece = extract_under_test(partition.make_domain(d), level);
+            EXPECT_TRUE(well_formed(piece)) << "domain " << d << ", level " << level;
+            locked += static_cast<std::size_t>(std::count(piece.flags.begin(), piece.flags.end(), kLocked));
+        }
+    }
+    EXPECT_GT(locked, 0u); // the interfaces were crossed
+}
+
+std::string error_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+
+// The element a bad domain's error names: the last node with a value that is
+// not finite, the first tetrahedron naming a node that does not exist.
+TEST(Extract, BadDomainsNameTheirElement) {
+    const Lattice lattice(6);
+    const Decomposition two(lattice, 2);
+    const Domain domain = two.make_domain(1, *make_field("paper"));
+    Domain nan = domain;
+    nan.f[5] = std::numeric_limits<float>::quiet_NaN();
+    nan.f[9] = std::numeric_limits<float>::infinity();
+    EXPECT_EQ(error_of([&] { extract_under_test(nan, 0.5f); }),
+              "domain 1: node " + std::to_string(domain.gid[9]) + " has a field value that is not finite");
+    Domain dangling = domain;
+    dangling.tets[4 * 30 + 2] = static_cast<std::int32_t>(domain.node_count());
+    dangling.tets[4 * 77 + 1] = -3;
+    EXPECT_EQ(error_of([&] { extract_under_test(dangling, 0.5f); }),
+              "domain 1: tetrahedron 30 refers to a node that does not exist");
+    Domain ragged = domain;
+    ragged.f.pop_back();
+    EXPECT_EQ(error_of([&] { extract_under_test(ragged, 0.5f); }), "domain 1: node arrays differ in length");
+    EXPECT_EQ(error_of([&] { extract_under_test(domain, std::numeric_limits<float>::infinity()); }),
+              "isosurface level is not a finite number");
+    // A failed call leaves the extraction usable.
+    EXPECT_TRUE(well_formed(extract_under_test(domain, 0.5f)));
+}
+
+TEST(Extract, EmptyDomainsAndLevelsOutsideTheRangeGiveEmptyPieces) {
+    const Lattice lattice(8);
+    const Decomposition one(lattice, 1);
+    const Domain domain = one.make_domain(0, *make_field("sphere"));
+    const Piece outside = extract_under_test(domain, 100.0f);
+    EXPECT_EQ(outside.vertex_count(), 0u);
+    EXPECT_EQ(outside.triangle_count(), 0u);
+    Domain no_tets = domain;
+    no_tets.tets.clear();
+    EXPECT_EQ(extract_under_test(no_tets, 2.0f).vertex_count(), 0u);
+    EXPECT_EQ(extract_under_test(Domain{}, 2.0f).vertex_count(), 0u);
+}
+
+#ifndef TETISO_TEST_GPU
+// What CI sees: no device, and a clear error for whoever asks for one.
+TEST(Extract, WithoutAGpuAskingForOneIsAClearError) {
+    const GpuInfo info = gpu_info();
+    if (info.available) GTEST_SKIP() << "a GPU is present: " << info.description;
+    EXPECT_FALSE(info.description.empty());
+    const std::string message = error_of([] { Device::cuda(); });
+    EXPECT_EQ(message.rfind("GPU: ", 0), 0u) << message;
+}
+#endif
 
 } // namespace
 } // namespace tetiso

@@ -1,14 +1,17 @@
 // A job's work on the GPU against the CPU's, byte for byte: lattice domains
-// of every built-in field and of an expression, from nothing to their reduced
-// piece with its interfaces locked and its samples kept; random values; an
-// unstructured mesh's domains; the reductions of seams' regions (pieces that
-// carry error bounds and raw-vertex samples); whole jobs with their domain
-// tasks on the GPU; and a bad domain's error. Skips where there is no GPU.
+// of every built-in field and of an expression built on the device and
+// extracted, or taken from nothing to their reduced piece with its
+// interfaces locked and its samples kept; random values; an unstructured
+// mesh's domains; the reductions of seams' regions (pieces that carry error
+// bounds and raw-vertex samples); whole jobs with their domain tasks on the
+// GPU; and bad domains' errors. Skips where there is no GPU. (Extraction of
+// domains uploaded from the host: test_extract built for the GPU.)
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -17,7 +20,8 @@
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/field.hpp"
-#include "tetiso/gpu.hpp"
+#include "tetiso/device.hpp"
+#include "tetiso/domain_task.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/mesh_partition.hpp"
 #include "tetiso/schedule.hpp"
@@ -35,6 +39,23 @@ ReduceOptions domain_options(double spacing, double bound = 0.25) {
     o.max_error = bound * spacing;
     o.keep_samples = true;
     return o;
+}
+
+// A domain's task on the GPU, extraction and reduction, as the job runs it.
+Piece gpu_task(Domain domain, float level, const ReduceOptions& o) {
+    DomainTaskOptions task;
+    task.level = level;
+    task.device = the_gpu();
+    task.reduce = o;
+    return run_domain_task(std::move(domain), task).piece;
+}
+
+Piece gpu_task(const LatticePartition& lattice, int domain, float level, const ReduceOptions& o) {
+    DomainTaskOptions task;
+    task.level = level;
+    task.device = the_gpu();
+    task.reduce = o;
+    return run_domain_task(lattice, domain, task).piece;
 }
 
 std::string error_of(const std::function<void()>& f) {
@@ -64,9 +85,10 @@ class GpuDomainTask : public ::testing::TestWithParam<LatticeCase> {};
 // reduces, and only the piece comes back.
 TEST_P(GpuDomainTask, IsTheCpuPieceByteForByte) {
     const LatticeCase& c = GetParam();
-    const Lattice lattice(c.n);
-    const Decomposition decomposition(lattice, c.domains);
-    const auto field = make_field(c.field);
+    const LatticePartition partition(c.n, c.domains, make_field(c.field));
+    const Lattice& lattice = partition.lattice();
+    const Decomposition& decomposition = partition.decomposition();
+    const Field* field = &partition.field();
     const auto level = static_cast<float>(field->default_level());
     const ReduceOptions o = domain_options(lattice.spacing(), c.bound);
     std::size_t locked = 0, reduced = 0;
@@ -75,7 +97,7 @@ TEST_P(GpuDomainTask, IsTheCpuPieceByteForByte) {
         const Piece cpu = reduce(raw, o);
         locked += static_cast<std::size_t>(std::count(cpu.flags.begin(), cpu.flags.end(), kLocked));
         reduced += raw.triangle_count() - cpu.triangle_count();
-        EXPECT_TRUE(same_piece(cpu, the_gpu().extract_and_reduce(decomposition, d, *field, level, o))) << "domain " << d;
+        EXPECT_TRUE(same_piece(cpu, gpu_task(partition, d, level, o))) << "domain " << d;
     }
     EXPECT_GT(reduced, 0u);
     if (c.domains > 1) {
@@ -87,6 +109,58 @@ INSTANTIATE_TEST_SUITE_P(Fields, GpuDomainTask,
                          ::testing::Values(LatticeCase{"paper", 60, 8, 0.25}, LatticeCase{"paper", 48, 1, 0.0},
                                            LatticeCase{"gyroid", 50, 27, 0.25}, LatticeCase{"sphere", 41, 8, 0.1},
                                            LatticeCase{"torus", 40, 27, 0.25}, LatticeCase{"x+y-5", 21, 5, 0.25}));
+
+// A lattice domain's extraction alone as a task runs it on the GPU: the
+// domain built on the device, a built-in field evaluated there, an
+// expression's values uploaded.
+Piece gpu_extraction(const LatticePartition& lattice, int domain, float level) {
+    DomainTaskOptions task;
+    task.level = level;
+    task.device = the_gpu();
+    return run_domain_task(lattice, domain, task).piece;
+}
+
+struct ExtractCase {
+    const char* field;
+    std::optional<double> level;
+    std::int64_t n;
+    int domains;
+};
+
+void PrintTo(const ExtractCase& c, std::ostream* out) { *out << c.field << " N=" << c.n << " D=" << c.domains; }
+
+class GpuLattice : public ::testing::TestWithParam<ExtractCase> {};
+
+TEST_P(GpuLattice, EveryDomainIsTheCpuPieceBitForBit) {
+    const ExtractCase& c = GetParam();
+    const LatticePartition partition(c.n, c.domains, make_field(c.field));
+    const auto level = static_cast<float>(c.level.value_or(partition.field().default_level()));
+    std::size_t triangles = 0;
+    for (int d = 0; d < partition.domain_count(); ++d) {
+        const Piece cpu = extract(partition.make_domain(d), level);
+        triangles += cpu.triangle_count();
+        EXPECT_TRUE(same_piece(cpu, gpu_extraction(partition, d, level))) << "domain " << d;
+    }
+    EXPECT_GT(triangles, 0u); // the case has a surface to compare
+}
+
+INSTANTIATE_TEST_SUITE_P(Fields, GpuLattice,
+                         ::testing::Values(ExtractCase{"sphere", std::nullopt, 41, 8},
+                                           ExtractCase{"torus", std::nullopt, 40, 27},
+                                           ExtractCase{"gyroid", std::nullopt, 50, 8},
+                                           ExtractCase{"paper", std::nullopt, 60, 27},
+                                           ExtractCase{"paper", std::nullopt, 100, 1},
+                                           // The level taken exactly at every node of a plane.
+                                           ExtractCase{"x-2.5", 0.0, 11, 8}, ExtractCase{"x+y-5", 0.0, 21, 5}));
+
+TEST(GpuPipeline, BadLatticeValuesGiveTheCpuErrors) {
+    // Infinite on the plane x = 2.5, which holds lattice nodes.
+    const LatticePartition four(11, 4, make_field("1/(x-2.5)"));
+    for (int d = 0; d < four.domain_count(); ++d) {
+        const std::string cpu = error_of([&] { extract(four.make_domain(d), 0.5f); });
+        EXPECT_EQ(cpu, error_of([&] { gpu_extraction(four, d, 0.5f); })) << d;
+    }
+}
 
 // Random values, a tenth of them exactly at the level: needles, zero-length
 // edges and clusters the reducer must clean up, on both devices alike.
@@ -100,7 +174,7 @@ TEST(GpuPipeline, RandomValuesGiveTheCpuPiece) {
         const float level = seed == 1 ? 0.0f : value(random) * 0.5f;
         for (float& f : domain.f) f = random() % 10 == 0 ? level : value(random);
         const ReduceOptions o = domain_options(lattice.spacing());
-        EXPECT_TRUE(same_piece(reduce(extract(domain, level), o), the_gpu().extract_and_reduce(domain, level, o)))
+        EXPECT_TRUE(same_piece(reduce(extract(domain, level), o), gpu_task(domain, level, o)))
             << "seed " << seed;
     }
 }
@@ -130,7 +204,7 @@ TEST(GpuPipeline, UnstructuredDomainsGiveTheCpuPieces) {
             cpu_error = e.what();
         }
         Piece gpu;
-        const std::string gpu_error = error_of([&] { gpu = the_gpu().extract_and_reduce(domain, 1.5f, o); });
+        const std::string gpu_error = error_of([&] { gpu = gpu_task(domain, 1.5f, o); });
         EXPECT_EQ(cpu_error.empty() ? "(no error)" : cpu_error, gpu_error) << "domain " << d;
         if (cpu_error.empty()) {
             EXPECT_TRUE(same_piece(cpu, gpu)) << "domain " << d;
@@ -206,10 +280,10 @@ TEST(GpuPipeline, BadDomainGivesTheCpuError) {
     const ReduceOptions o = domain_options(lattice.spacing());
     const std::string cpu = error_of([&] { reduce(extract(domain, 2.0f), o); });
     EXPECT_NE(cpu, "(no error)");
-    EXPECT_EQ(cpu, error_of([&] { the_gpu().extract_and_reduce(domain, 2.0f, o); }));
+    EXPECT_EQ(cpu, error_of([&] { gpu_task(domain, 2.0f, o); }));
     // The GPU stays usable.
     const Domain good = one.make_domain(0, *field);
-    EXPECT_TRUE(same_piece(reduce(extract(good, 2.0f), o), the_gpu().extract_and_reduce(good, 2.0f, o)));
+    EXPECT_TRUE(same_piece(reduce(extract(good, 2.0f), o), gpu_task(good, 2.0f, o)));
 }
 
 } // namespace

@@ -11,6 +11,7 @@
 //    on an interface of the domain.
 #pragma once
 
+#include "tetiso/device.hpp"
 #include "tetiso/mesh.hpp"
 
 namespace tetiso {
@@ -19,10 +20,13 @@ struct ExtractOptions {
     // Threads to use inside the domain; 0 means OpenMP's default. The output
     // does not depend on it.
     int threads = 1;
+    // Where it runs; the output does not depend on it either.
+    Device device{};
 };
 
 // Throws tetiso::Error if a field value is not finite or a tetrahedron refers
-// to a node that does not exist.
-Piece extract(const Domain& domain, float level, const ExtractOptions& options = {});
+// to a node that does not exist (the same messages on every device). Adds
+// its seconds to seconds->upload, ->extract and ->download where set.
+Piece extract(const Domain& domain, float level, const ExtractOptions& options = {}, StageSeconds* seconds = nullptr);
 
 } // namespace tetiso

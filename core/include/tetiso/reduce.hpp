@@ -22,6 +22,7 @@
 #include <functional>
 #include <vector>
 
+#include "tetiso/device.hpp"
 #include "tetiso/mesh.hpp"
 
 namespace tetiso {
@@ -42,6 +43,9 @@ struct ReduceOptions {
     // (0 or less: keep the current count); lets a job hand a running
     // reduction the cores of workers that ran out of work.
     std::function<int()> more_threads;
+    // Where the rounds run; the output does not depend on it. threads and
+    // more_threads apply to the host.
+    Device device{};
     // Upper bound on the number of rounds (>= 0).
     int max_rounds = 200;
     // Smallest angle of the new triangles: a collapse or flip may not make
@@ -107,8 +111,9 @@ struct ReduceRound {
     double seconds = 0.0; // wall clock, every step of the round
 };
 
-// Wall-clock seconds spent in each step of the rounds, summed over rounds
-// (for profiling; see reduce.cpp for the steps).
+// Wall-clock seconds spent in each step of the rounds, summed over rounds:
+// the reduce stage of StageSeconds taken apart (for profiling; see
+// rounds.hpp for the steps).
 struct ReduceStageSeconds {
     double fans = 0, edges = 0, geometry = 0, propose = 0, select = 0, apply = 0, compact = 0;
 };
@@ -128,7 +133,9 @@ struct ReduceReport {
 // Vertices used by no triangle are kept as they are.
 // Throws tetiso::Error for options outside their valid range and for input
 // that breaks these rules, naming the element (e.g. "edge (key a, key b) has
-// 3 triangles").
-Piece reduce(const Piece& in, const ReduceOptions& options = {}, ReduceReport* report = nullptr);
+// 3 triangles"), the same on every device. Adds its seconds to
+// seconds->upload, ->reduce and ->download where set.
+Piece reduce(const Piece& in, const ReduceOptions& options = {}, ReduceReport* report = nullptr,
+             StageSeconds* seconds = nullptr);
 
 } // namespace tetiso

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "tetiso/device.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/mesh.hpp"
 #include "tetiso/partition.hpp"
@@ -123,16 +124,13 @@ struct TaskRecord {
     // Raw vertices the result carries for later seams (Piece::sample_xyz):
     // what --sample-rings costs in memory and messages, 16 bytes each.
     std::uint64_t samples_out = 0;
-    // Where a task's time went, on the rank that ran it: a domain's
-    // generation, extraction and reduction; a seam's merge by key, region
-    // near the seam, reduction and splice (SeamReport::Seconds).
-    struct Stages {
-        double generate = 0, extract = 0, reduce = 0, merge = 0, region = 0, splice = 0;
-        // A task run on a GPU: its index (-1: the CPU), and the seconds its
-        // input took to the device and its piece back (extract and reduce
-        // are then the device's).
-        std::int32_t gpu = -1;
-        double upload = 0, download = 0;
+    // Where a task's time went, on the rank that ran it: a domain's stages
+    // (on a GPU, upload and download too; extract and reduce are then the
+    // device's); a seam's merge by key, region near the seam, reduction and
+    // splice (SeamReport::Seconds).
+    struct Stages : StageSeconds {
+        double merge = 0, region = 0, splice = 0;
+        std::int32_t gpu = -1; // the GPU a domain task ran on, -1 for the CPU
     } stages;
     // With --device auto (or gpu under MPI): the seconds the node's resource
     // manager predicted for the task on the device it granted, and how long
@@ -160,8 +158,6 @@ using Progress = std::function<void(int, int, double)>;
 // Building it validates the configuration and reads any files (throws
 // tetiso::Error); every rank builds its own, and an MPI job checks that all
 // agree (Partition::fingerprint) before it starts.
-class Gpu;
-
 class Job {
 public:
     explicit Job(const JobConfig& config);
@@ -184,7 +180,7 @@ public:
     virtual Piece execute(int task, const Piece* left, const Piece* right, TaskRecord& record,
                           const TaskThreads& threads) const;
 
-    // Makes this process's Gpu for CUDA device `gpu` and runs a small domain
+    // Makes this process's Device for CUDA device `gpu` and runs a small domain
     // on it, so that the context, the kernels' loading and the first
     // allocations are paid before the job's first task there (a GPU's
     // driving process does this at start-up: the first task would otherwise
@@ -200,16 +196,15 @@ private:
         return options;
     }
 
-    // A domain task on GPU `gpu` of this process's node.
-    Piece execute_on_gpu(int domain, int gpu, TaskRecord& record, const ReduceOptions& options) const;
-    Gpu& gpu(int index) const;
+    // CUDA device `index` of this process's node, made at its first use.
+    const Device& gpu(int index) const;
 
     JobConfig config_;
     std::unique_ptr<Partition> partition_;
     // Made by prepare_gpu or at the first domain task that runs on each GPU
     // (rank 0 of an MPI job runs only seams, and needs none); kept for the
     // next.
-    mutable std::map<int, std::unique_ptr<Gpu>> gpus_;
+    mutable std::map<int, Device> gpus_;
     std::vector<TaskNode> tree_;
     float level_ = 0;
     ReduceOptions reduce_options_;

@@ -1,5 +1,6 @@
-// Reduction of a piece on the host (reduce.hpp): the input and option
-// checks, then the round driver (rounds.hpp) over the OpenMP backend.
+// Reduction of a piece (reduce.hpp): the input and option checks, then the
+// round driver (rounds.hpp) over the OpenMP backend, or the CUDA Device's
+// (reduce_gpu.cu) where the options name one.
 #include "tetiso/reduce.hpp"
 
 #include <chrono>
@@ -7,6 +8,7 @@
 #include <limits>
 #include <string>
 
+#include "../device_entry.hpp"
 #include "../exec_host.hpp"
 #include "input.hpp"
 #include "rounds.hpp"
@@ -117,8 +119,13 @@ Piece reduce_on_host(const Piece& in, const ReduceOptions& options, ReduceReport
 
 } // namespace
 
-Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report) {
-    return reduce_on_host(in, options, report, false, 0, false);
+Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report, StageSeconds* seconds) {
+    if (options.device.is_gpu()) return on_gpu::reduce(options.device.state(), in, options, report, seconds);
+    ReduceReport local_report;
+    ReduceReport& rep = report ? *report : local_report;
+    Piece out = reduce_on_host(in, options, &rep, false, 0, false);
+    if (seconds) seconds->reduce += rep.seconds;
+    return out;
 }
 
 namespace detail {

@@ -1,15 +1,15 @@
-// Reduction on a CUDA GPU (tetiso/gpu.hpp): the round driver (rounds.hpp)
+// Reduction on a CUDA Device (tetiso/device.hpp): the round driver (rounds.hpp)
 // over the CUDA backend (exec_cuda.cuh), so the per-element functions and
 // the order of every step are the host's and the piece is reduce()'s, byte
 // for byte. A host piece is uploaded and checked as reduce() checks it; a
-// domain's surface extracted on the device (extract_and_reduce) never
+// domain's surface extracted on the device (a domain's task) never
 // leaves it: it is checked there, and handed to the reduction in place.
 #include <cuda_runtime.h>
 
 #include <chrono>
 #include <cstdint>
 
-#include "../gpu_state.cuh"
+#include "../device_cuda.cuh"
 #include "input.hpp"
 #include "rounds.hpp"
 #include "tetiso/error.hpp"
@@ -86,68 +86,50 @@ void finish_report(ReduceReport& rep, const Piece& out, std::chrono::steady_cloc
 
 } // namespace
 
-Piece Gpu::reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report) {
+Piece Device::State::reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report) {
     const auto start = std::chrono::steady_clock::now();
     check_reduce_options(options);
     check_reduce_input(in);
-    State& g = *state_;
-    g.use_device();
-    g.timings = {};
+    use_device();
     ReduceReport local_report;
     ReduceReport& rep = report ? *report : local_report;
     start_report(rep, in.triangle_count(), in.vertex_count());
     auto t = std::chrono::steady_clock::now();
-    reduction::load_piece(*g.exec, in, options.max_error > 0, g.reduction);
-    g.exec->sync();
-    g.timings.upload = seconds_since(t);
+    reduction::load_piece(*exec, in, options.max_error > 0, reduction);
+    exec->sync();
+    timings.upload += seconds_since(t);
     t = std::chrono::steady_clock::now();
-    reduction::run_rounds(*g.exec, g.reduction, options, 1, rep);
-    g.timings.reduce = g.timings.compute = seconds_since(t);
+    reduction::run_rounds(*exec, reduction, options, 1, rep);
+    timings.reduce += seconds_since(t);
     t = std::chrono::steady_clock::now();
-    Piece out = reduction::unload_piece(*g.exec, g.reduction, options.keep_samples);
+    Piece out = reduction::unload_piece(*exec, reduction, options.keep_samples);
     out.domains = in.domains;
-    g.timings.download = seconds_since(t);
+    timings.download += seconds_since(t);
     finish_report(rep, out, start);
     return out;
 }
 
-namespace {
-
 // The report's seconds are the reduction's, from the surface on the device
-// to the piece on the host (the extraction's are in the Gpu's timings).
-Piece reduce_extracted(Gpu::State& g, const DeviceSurface& surface, const ReduceOptions& options, ReduceReport* report) {
+// to the piece on the host (the extraction's are in timings).
+Piece Device::State::reduce(const DeviceSurface& surface, const ReduceOptions& options, ReduceReport* report) {
     const auto start = std::chrono::steady_clock::now();
     check_reduce_options(options);
     // A surface that breaks reduce()'s rules comes back, to be refused with
     // the message the CPU gives.
-    if (breaks_input_rules(*g.exec, surface)) check_reduce_input(g.download(surface));
+    if (breaks_input_rules(*exec, surface)) check_reduce_input(download(surface));
     ReduceReport local_report;
     ReduceReport& rep = report ? *report : local_report;
     start_report(rep, static_cast<std::size_t>(surface.triangle_count), static_cast<std::size_t>(surface.vertices));
     const auto t = std::chrono::steady_clock::now();
-    load_device_surface(*g.exec, surface, options.max_error > 0, g.reduction);
-    reduction::run_rounds(*g.exec, g.reduction, options, 1, rep);
-    g.timings.reduce = seconds_since(t);
-    g.timings.compute += g.timings.reduce;
+    load_device_surface(*exec, surface, options.max_error > 0, reduction);
+    reduction::run_rounds(*exec, reduction, options, 1, rep);
+    timings.reduce += seconds_since(t);
     const auto t_down = std::chrono::steady_clock::now();
-    Piece out = reduction::unload_piece(*g.exec, g.reduction, options.keep_samples);
+    Piece out = reduction::unload_piece(*exec, reduction, options.keep_samples);
     out.domains = {surface.domain};
-    g.timings.download = seconds_since(t_down);
+    timings.download += seconds_since(t_down);
     finish_report(rep, out, start);
     return out;
-}
-
-} // namespace
-
-Piece Gpu::extract_and_reduce(const Domain& domain, float level, const ReduceOptions& options, ReduceReport* report) {
-    state_->timings = {};
-    return reduce_extracted(*state_, state_->extract(domain, level), options, report);
-}
-
-Piece Gpu::extract_and_reduce(const Decomposition& decomposition, int domain, const Field& field, float level,
-                              const ReduceOptions& options, ReduceReport* report) {
-    state_->timings = {};
-    return reduce_extracted(*state_, state_->extract(decomposition, domain, field, level), options, report);
 }
 
 } // namespace tetiso

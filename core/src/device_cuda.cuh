@@ -1,8 +1,8 @@
-// What one Gpu (tetiso/gpu.hpp) holds: its device and stream, the buffers
-// of its extraction and of its reduction, kept from task to task. Shared by
-// the CUDA units of extraction (extract_gpu.cu) and reduction
-// (reduce/reduce_gpu.cu), so that a domain's surface passes from one to the
-// other on the device.
+// What a CUDA Device (tetiso/device.hpp) holds: its device and stream, the
+// buffers of its extraction and of its reduction, kept from task to task.
+// Made here (device_cuda.cu); shared by the CUDA units of extraction
+// (extract_gpu.cu) and reduction (reduce/reduce_gpu.cu), so that a domain's
+// surface passes from one to the other on the device.
 #pragma once
 
 #include <cuda_runtime.h>
@@ -14,8 +14,13 @@
 
 #include "cuda_support.cuh"
 #include "exec_cuda.cuh"
+#include "marching_tets.hpp"
 #include "reduce/rounds.hpp"
-#include "tetiso/gpu.hpp"
+#include "tetiso/device.hpp"
+#include "tetiso/field.hpp"
+#include "tetiso/lattice.hpp"
+#include "tetiso/mesh.hpp"
+#include "tetiso/reduce.hpp"
 
 namespace tetiso {
 
@@ -30,31 +35,20 @@ struct DeviceSurface {
     int domain;
 };
 
-// The passes of marching tetrahedra on the device (extract_gpu.cu).
+// What extraction keeps on the device (extract_gpu.cu): the domain, and the
+// arrays of the passes of marching tetrahedra (marching_tets.hpp).
 struct ExtractionBuffers {
     template <class T>
     using Array = cuda::DeviceArray<T>;
-    // The domain.
     Array<float> x, y, z, f;
     Array<GlobalId> gid;
     Array<std::uint8_t> interface;
     Array<EdgeKey> shared;
     Array<std::int32_t> tets;
-    // Per node and per tetrahedron.
-    Array<std::uint8_t> above, pattern;
-    Array<std::uint32_t> crossings, first_crossing, triangles_per_tet, first_triangle;
-    // Crossings, then vertices.
-    Array<std::uint64_t> codes, sorted_codes, edges;
-    Array<float> vx, vy, vz, sx, sy, sz;
-    Array<EdgeKey> key, sorted_key;
-    Array<std::uint8_t> flags, sorted_flags;
-    Array<std::int32_t> corners, order, sorted_order, rank;
-    // Scalars the host reads: bad node, bad tetrahedron, unique count, unsorted flag.
-    Array<unsigned long long> scalars;
-    Array<std::byte> scratch; // CUB's temporary storage
+    marching::Arrays<CudaExec> passes;
 };
 
-struct Gpu::State {
+struct Device::State {
     explicit State(int device);
     ~State();
 
@@ -64,14 +58,20 @@ struct Gpu::State {
     ExtractionBuffers extraction;
     std::unique_ptr<CudaExec> exec;
     reduction::ReductionState<CudaExec> reduction;
-    GpuTimings timings;
+    StageSeconds timings; // of the current call, added to the caller's at its end
 
     // Extraction up to a surface on the device; fills timings.upload and
-    // .compute (extract_gpu.cu).
+    // .extract (extract_gpu.cu).
     DeviceSurface extract(const Domain& domain, float level);
     DeviceSurface extract(const Decomposition& decomposition, int domain, const Field& field, float level);
     // The surface as a piece; fills timings.download.
     Piece download(const DeviceSurface& surface);
+
+    // tetiso::reduce of a host piece, and of a surface extracted here, which
+    // never leaves the device (reduce/reduce_gpu.cu); fill timings.upload,
+    // .reduce and .download.
+    Piece reduce(const Piece& piece, const ReduceOptions& options, ReduceReport* report);
+    Piece reduce(const DeviceSurface& surface, const ReduceOptions& options, ReduceReport* report);
 
     void use_device() const { cuda::check(cudaSetDevice(device), "cudaSetDevice"); }
 };

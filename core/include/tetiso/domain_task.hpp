@@ -1,0 +1,52 @@
+// One domain's task (paper, section "Load balancing and job scheduling"):
+// its tetrahedra, marching tetrahedra, and the reduction of its piece, on
+// the host or a GPU as its Device says, with the same bytes on either. On a
+// GPU the piece stays on the device from the field values to the reduced
+// piece, and a lattice domain is built there too (a built-in field
+// evaluated there), so that only the piece crosses the bus.
+#pragma once
+
+#include <cstddef>
+#include <limits>
+#include <optional>
+
+#include "tetiso/device.hpp"
+#include "tetiso/mesh.hpp"
+#include "tetiso/partition.hpp"
+#include "tetiso/reduce.hpp"
+
+namespace tetiso {
+
+struct DomainTaskOptions {
+    float level = 0;
+    // Where the task runs, and the host's threads for its extraction (the
+    // reduction's are reduce->threads and reduce->more_threads).
+    Device device{};
+    int threads = 1;
+    // Reduce the extracted piece with these options (their device replaced
+    // by the task's); none: extract only.
+    std::optional<ReduceOptions> reduce;
+};
+
+struct DomainTaskResult {
+    Piece piece;
+    StageSeconds seconds;
+    std::size_t triangles_extracted = 0;
+    // The domain's lowest and highest field value where the host held them
+    // (low > high where the values stayed on a GPU): a surface that comes
+    // out empty says whether its level lies outside them.
+    float field_low = std::numeric_limits<float>::infinity();
+    float field_high = -std::numeric_limits<float>::infinity();
+};
+
+// Domain `domain` of a partition, made by the partition (a lattice domain by
+// the GPU itself); a piece the partition says may be pinched is reduced by
+// reduce_piece. Throws tetiso::Error as make_domain, extract and reduce do.
+// Batching several domains in flight on one GPU belongs here: the same call over a list of domains.
+DomainTaskResult run_domain_task(const Partition& partition, int domain, const DomainTaskOptions& options);
+
+// A domain already built, whose piece is a 2-manifold (a convex domain's);
+// it is released before the reduction runs.
+DomainTaskResult run_domain_task(Domain domain, const DomainTaskOptions& options);
+
+} // namespace tetiso

@@ -1,0 +1,79 @@
+// One domain's task (domain_task.hpp): the domain made where its Device
+// wants it, extraction, then reduction, each stage timed.
+#include "tetiso/domain_task.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include "device_entry.hpp"
+#include "tetiso/extract.hpp"
+#include "tetiso/lattice.hpp"
+#include "tetiso/seam.hpp"
+
+namespace tetiso {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::optional<ReduceOptions> reduce_options_of(const DomainTaskOptions& options) {
+    std::optional<ReduceOptions> reduce = options.reduce;
+    if (reduce) reduce->device = options.device;
+    return reduce;
+}
+
+// A lattice domain on a GPU: built, extracted and reduced on the device.
+DomainTaskResult run_on_gpu(const LatticePartition& lattice, int domain, const DomainTaskOptions& options) {
+    DomainTaskResult result;
+    const std::optional<ReduceOptions> reduce = reduce_options_of(options);
+    ReduceReport report;
+    result.piece = on_gpu::extract(options.device.state(), lattice.decomposition(), domain, lattice.field(),
+                                   options.level, reduce ? &*reduce : nullptr, &report, &result.seconds);
+    result.triangles_extracted = reduce ? report.triangles_in : result.piece.triangle_count();
+    return result;
+}
+
+// A domain built on the host; `manifold`: its piece has no pinch.
+DomainTaskResult run_built(Domain domain, bool manifold, const DomainTaskOptions& options,
+                           DomainTaskResult result = {}) {
+    const std::optional<ReduceOptions> reduce = reduce_options_of(options);
+    if (!options.device.is_gpu() && !domain.f.empty()) {
+        const auto [low, high] = std::minmax_element(domain.f.begin(), domain.f.end());
+        result.field_low = *low;
+        result.field_high = *high;
+    }
+    if (options.device.is_gpu() && reduce && manifold) {
+        ReduceReport report;
+        result.piece = on_gpu::extract(options.device.state(), domain, options.level, &*reduce, &report,
+                                       &result.seconds);
+        result.triangles_extracted = report.triangles_in;
+        return result;
+    }
+    result.piece = extract(domain, options.level, ExtractOptions{options.threads, options.device}, &result.seconds);
+    result.triangles_extracted = result.piece.triangle_count();
+    domain = Domain(); // the tetrahedra go before the reduction needs its memory
+    if (!reduce) return result;
+    const auto t = std::chrono::steady_clock::now();
+    result.piece = manifold ? tetiso::reduce(result.piece, *reduce) : reduce_piece(result.piece, *reduce);
+    result.seconds.reduce += seconds_since(t);
+    return result;
+}
+
+} // namespace
+
+DomainTaskResult run_domain_task(const Partition& partition, int domain, const DomainTaskOptions& options) {
+    const auto* lattice = dynamic_cast<const LatticePartition*>(&partition);
+    if (lattice && options.device.is_gpu()) return run_on_gpu(*lattice, domain, options);
+    const auto start = std::chrono::steady_clock::now();
+    Domain built = partition.make_domain(domain);
+    DomainTaskResult result;
+    result.seconds.generate = seconds_since(start);
+    return run_built(std::move(built), partition.pieces_are_manifold(), options, std::move(result));
+}
+
+DomainTaskResult run_domain_task(Domain domain, const DomainTaskOptions& options) {
+    return run_built(std::move(domain), true, options);
+}
+
+} // namespace tetiso
