@@ -2,7 +2,7 @@
 // results/reduce-gpu/ reports:
 //   reduce/gpu/N:<N>           the paper surface of the N^3 lattice (D = 1),
 //                              reduced at the job's default bound (0.25 h)
-//                              by Gpu::reduce; timed by the device's compute
+//                              by reduce() on a CUDA Device; timed by the device's compute
 //                              seconds (the surface already on the device),
 //                              upload and download reported beside them
 //   reduce/tetiso/N:<N>/threads:T   the CPU's reduce, 1 and every thread

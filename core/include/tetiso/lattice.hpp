@@ -94,7 +94,7 @@ public:
 
     // The field values alone, as make_domain gives them (node i + px*(j +
     // py*k) of the box, px and py its nodes per axis): what the GPU needs of
-    // a lattice domain whose field it cannot evaluate itself (gpu.hpp).
+    // a lattice domain whose field it cannot evaluate itself (device.hpp).
     std::vector<float> field_values(int domain, const Field& field) const;
 
     // Nodes of one domain; throws tetiso::Error when they do not fit int32.
