@@ -72,7 +72,7 @@ bool Sends::wait(Clock::time_point deadline) {
 }
 
 MpiTransport::MpiTransport(int ranks, double task_timeout)
-    : ranks_(ranks), task_timeout_(task_timeout), start_(Clock::now()), last_heartbeat_(start_),
+    : ranks_(ranks), task_timeout_(task_timeout), patience_(task_timeout), start_(Clock::now()), last_heartbeat_(start_),
       greeted_(static_cast<std::size_t>(ranks), false), worker_cores_(static_cast<std::size_t>(ranks)) {}
 
 double MpiTransport::clock() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
@@ -106,13 +106,17 @@ void MpiTransport::heartbeat(double seconds) {
 // Four heartbeats in each worker's patience: a late one is not yet silence.
 void MpiTransport::heartbeat_if_due() {
     if (task_timeout_ > 0 && Clock::now() - last_heartbeat_ > std::chrono::duration<double>(task_timeout_ / 4))
-        heartbeat(task_timeout_);
+        heartbeat(patience_);
 }
 
-void MpiTransport::busy_for(double seconds) { heartbeat(seconds + task_timeout_); }
+void MpiTransport::busy_for(double seconds) {
+    patience_ = seconds + task_timeout_;
+    heartbeat(patience_);
+}
 
 std::optional<WorkerEvent> MpiTransport::receive(double deadline) {
-    heartbeat_if_due(); // also when reports keep coming and the wait never pauses
+    patience_ = task_timeout_; // listening again
+    heartbeat_if_due();         // also when reports keep coming and the wait never pauses
     MPI_Status status;
     const bool arrived = wait_for_message(MPI_ANY_SOURCE, status, deadline_in(deadline - clock()), [this] {
         sends_.progress();

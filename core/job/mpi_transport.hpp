@@ -96,12 +96,17 @@ public:
     // 0's are not known.
     bool job_cores(cpu_set_t& cores) const;
 
+    // A heartbeat if one is due, from a task rank 0 runs (between its
+    // reduction rounds): the workers keep the patience busy_for() asked.
+    void keep_alive() { heartbeat_if_due(); }
+
 private:
     void heartbeat(double seconds);
     void heartbeat_if_due();
 
     int ranks_;
     double task_timeout_;
+    double patience_; // what the heartbeats ask of the workers now
     Clock::time_point start_;
     Clock::time_point last_heartbeat_;
     Sends sends_;

@@ -66,7 +66,12 @@ JobResult control(const Job& job, int ranks, const Progress& progress, const std
         const auto started = Clock::now();
         Piece piece;
         try {
-            piece = job.execute(task, left, right, record, TaskThreads{threads, {}, {}});
+            // Between reduction rounds, heartbeats: the workers wait on rank 0.
+            const auto keep_alive = [&transport] {
+                transport.keep_alive();
+                return 0;
+            };
+            piece = job.execute(task, left, right, record, TaskThreads{threads, keep_alive, {}});
         } catch (...) {
             back_home();
             throw;
