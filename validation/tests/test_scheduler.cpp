@@ -297,7 +297,7 @@ TEST(Scheduler, IdleWorkersLendTheirCoresOnceNothingIsReady) {
 }
 
 TEST(Scheduler, GpuDriversRunTheirGpusTasksAndNeitherLendNorBorrow) {
-    JobConfig config = lattice_job(12, 8);
+    JobConfig config = lattice_job(12, 27);
     config.device = JobConfig::Device::automatic;
     const Job job(config);
     // One node: rank 0 and workers 1-3; rank 1 drives GPU 0.
@@ -326,7 +326,16 @@ TEST(Scheduler, GpuDriversRunTheirGpusTasksAndNeitherLendNorBorrow) {
             EXPECT_EQ(s.gpu, -1) << "task " << s.task << " for a GPU went to rank " << s.worker;
         }
     }
-    EXPECT_GT(on_gpu, 0);
+    // Ten times faster, the GPU ends most domains first even behind a queue:
+    // their grants wait for the driver rather than go to an idle CPU worker.
+    EXPECT_GT(on_gpu, 27 / 2) << "of 27 domains";
+    // No rank ever holds two tasks.
+    std::map<int, std::vector<std::pair<double, double>>> spans;
+    for (const TaskRecord& r : result->tasks) spans[r.rank].push_back({r.start, r.end});
+    for (auto& [rank, s] : spans) {
+        std::sort(s.begin(), s.end());
+        for (std::size_t i = 1; i < s.size(); ++i) EXPECT_LE(s[i - 1].second, s[i].first + 1e-9) << "rank " << rank;
+    }
     for (const FakeTransport::Lent& l : transport.lent) {
         EXPECT_NE(l.lender, 1);
         EXPECT_NE(l.borrower, 1);
