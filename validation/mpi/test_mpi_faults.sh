@@ -105,6 +105,21 @@ for rank in 1 0; do
     [ "$status" -eq 2 ] || { echo "FAIL: rank $rank stopped: exit status $status, not 2"; failures=$((failures + 1)); }
 done
 
+# The deadline's floor is a number of seconds >= 0: anything else is refused
+# before any rank starts, in one line, with status 2.
+for bad in -1 nan inf abc; do
+    rm -rf "$work/out" && mkdir "$work/out"
+    "$tetiso" run --lattice 10 --task-timeout "$bad" -o "$work/out/s.ply" >"$work/stdout" 2>"$work/stderr"
+    status=$?
+    if [ "$status" -ne 2 ] || [ "$(wc -l <"$work/stderr")" -ne 1 ] || ! grep -q -- "--task-timeout" "$work/stderr" ||
+        [ -n "$(ls -A "$work/out")" ]; then
+        echo "FAIL: --task-timeout $bad: status $status: $(head -2 "$work/stderr")"
+        failures=$((failures + 1))
+    else
+        passed=$((passed + 1))
+    fi
+done
+
 # Rank 0's disk full under the output (a file-size limit): the write fails,
 # the job ends non-zero naming the output, and neither it nor the report
 # (nor a temporary of either) is left.
