@@ -260,6 +260,12 @@ void add_run_command(CLI::App& app, Command& run) {
     cmd->add_option("-o,--output", args->output, "Output surface, .ply or .vtp")->required();
     cmd->add_option("--report", args->report, "Write a JSON report (totals and one record per task) here");
     cmd->add_flag("--quiet", args->quiet, "No progress lines on stderr");
+    cmd->add_option("--task-timeout", job.task_timeout,
+                    "Under mpirun: the shortest deadline of a task, in seconds; a rank whose task has not ended by "
+                    "max(this, 10 x its predicted time), or a rank 0 silent as long, is named and the job aborted "
+                    "(0: no deadline)")
+        ->check(error_bound_check())
+        ->capture_default_str();
     add_device_options(*cmd, args->device, "the domain tasks (extraction and reduction; seams stay on the CPU)", true);
     cmd->callback([&run, args, domains] {
         args->job.device = args->device.on_gpu()      ? JobConfig::Device::gpu

@@ -1,5 +1,6 @@
-// The job's tasks and their order (paper, section "Load balancing and job
-// scheduling"), shared by the single-process and the MPI runs.
+// The job: its configuration checked, its partition built, and one task run
+// (schedule.hpp). The order of the tasks and who runs them is the
+// scheduler's (core/job/scheduler.hpp).
 #include "tetiso/schedule.hpp"
 
 #include <algorithm>
@@ -8,7 +9,6 @@
 #include <cstdlib>
 #include <limits>
 
-#include "tetiso/placement.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/device.hpp"
 #include "tetiso/domain_task.hpp"
@@ -20,55 +20,6 @@
 #include "tetiso/tetgen.hpp"
 
 namespace tetiso {
-
-namespace {
-
-// Appends a copy of the partition tree's subtree under `node`, in
-// depth-first order; returns the copy's index.
-int copy_subtree(const std::vector<DomainTreeNode>& partition_tree, int node, std::vector<TaskNode>& tree) {
-    const DomainTreeNode& b = partition_tree[static_cast<std::size_t>(node)];
-    const int at = static_cast<int>(tree.size());
-    tree.push_back(TaskNode{b.first, b.count, -1, -1});
-    if (b.left >= 0) {
-        const int left = copy_subtree(partition_tree, b.left, tree);
-        const int right = copy_subtree(partition_tree, b.right, tree);
-        tree[static_cast<std::size_t>(at)].left = left;
-        tree[static_cast<std::size_t>(at)].right = right;
-    }
-    return at;
-}
-
-} // namespace
-
-std::vector<TaskNode> task_tree(const std::vector<DomainTreeNode>& partition_tree) {
-    // The subtrees hanging off the partition tree's rightmost path, in
-    // domain order: each left child on the path, then the path's last leaf.
-    std::vector<int> hanging;
-    int node = 0;
-    while (partition_tree[static_cast<std::size_t>(node)].left >= 0) {
-        hanging.push_back(partition_tree[static_cast<std::size_t>(node)].left);
-        node = partition_tree[static_cast<std::size_t>(node)].right;
-    }
-    hanging.push_back(node);
-
-    // The chain's seams first, root at 0: seam k (k = 0 .. h-2, h subtrees)
-    // joins the first h-1-k subtrees, seam k+1's piece, with subtree h-1-k.
-    // Then the subtrees in domain order, so leaf tasks keep it too.
-    const int seams = static_cast<int>(hanging.size()) - 1;
-    std::vector<TaskNode> tree(static_cast<std::size_t>(seams));
-    std::vector<int> subtree_root;
-    for (const int h : hanging) subtree_root.push_back(copy_subtree(partition_tree, h, tree));
-    for (int k = 0; k < seams; ++k) {
-        const int joined = seams - k; // the subtree this seam adds
-        const int rest = k + 1 < seams ? k + 1 : subtree_root[0];
-        TaskNode& seam = tree[static_cast<std::size_t>(k)];
-        seam.left = rest;
-        seam.right = subtree_root[static_cast<std::size_t>(joined)];
-        seam.first = 0;
-        seam.count = tree[static_cast<std::size_t>(seam.right)].first + tree[static_cast<std::size_t>(seam.right)].count;
-    }
-    return tree;
-}
 
 namespace {
 
@@ -112,6 +63,8 @@ Job::Job(const JobConfig& config) : config_(config) {
                     std::to_string(kMaxThreads));
     if (!std::isfinite(config.max_error_spacings) || config.max_error_spacings < 0)
         throw Error("error bound " + std::to_string(config.max_error_spacings) + " is not a finite number >= 0");
+    if (!std::isfinite(config.task_timeout) || config.task_timeout < 0)
+        throw Error("task timeout " + std::to_string(config.task_timeout) + " is not a finite number of seconds >= 0");
     std::unique_ptr<Field> field = make_field(config.field);
     // An attribute has no level of its own; an analytic field does, and a
     // split mesh keeps the one it was written with.
@@ -208,97 +161,6 @@ Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& 
     record.triangles_out = piece.triangle_count();
     record.samples_out = piece.sample_count();
     return piece;
-}
-
-TaskQueue::TaskQueue(const Job& job) {
-    const int count = job.task_count();
-    parent_.assign(static_cast<std::size_t>(count), -1);
-    children_done_.assign(static_cast<std::size_t>(count), 0);
-    for (int t = 0; t < count; ++t) {
-        const TaskNode& n = job.node(t);
-        if (n.left >= 0) {
-            parent_[static_cast<std::size_t>(n.left)] = t;
-            parent_[static_cast<std::size_t>(n.right)] = t;
-        } else {
-            // Leaf task indices follow domain ids (task_tree): ordering leaves
-            // by task index orders them by domain.
-            ready_.insert({1, t});
-        }
-    }
-}
-
-int TaskQueue::pop() {
-    const int task = ready_.begin()->second;
-    ready_.erase(ready_.begin());
-    return task;
-}
-
-void TaskQueue::complete(int task) {
-    const int parent = parent_[static_cast<std::size_t>(task)];
-    if (parent < 0) {
-        done_root_ = true;
-        return;
-    }
-    if (++children_done_[static_cast<std::size_t>(parent)] == 2) ready_.insert({0, parent});
-}
-
-JobResult run_local(const Job& job, const Progress& progress) {
-    using clock = std::chrono::steady_clock;
-    const auto start = clock::now();
-    auto seconds = [&] { return std::chrono::duration<double>(clock::now() - start).count(); };
-    TaskQueue queue(job);
-    std::vector<std::optional<Piece>> pieces(static_cast<std::size_t>(job.task_count()));
-    JobResult result;
-    int done = 0;
-    std::optional<NodePlacement> placement;
-    if (job.config().device == JobConfig::Device::automatic) {
-        const std::vector<int> gpus = NodePlacement::usable_gpus(job.config(), gpu_count());
-        placement.emplace(job, 1, gpus, gpus.empty() ? 0.0 : gpu_memory_mib(gpus.front()));
-    }
-    while (!queue.finished()) {
-        const int task = queue.pop();
-        const TaskNode& n = job.node(task);
-        TaskRecord record;
-        record.start = seconds();
-        const Piece* left = n.left >= 0 ? &*pieces[static_cast<std::size_t>(n.left)] : nullptr;
-        const Piece* right = n.right >= 0 ? &*pieces[static_cast<std::size_t>(n.right)] : nullptr;
-        TaskThreads threads{job.config().threads, {}, {}};
-        // One process runs one task at a time: every grant starts at once,
-        // and the choice is the device predicted fastest.
-        Grant grant;
-        if (placement) {
-            grant = placement->manager.request(placement->request(task, left, right), seconds());
-            placement->manager.start(grant.ticket, seconds());
-            threads.gpu = placement->gpu_of(grant.device);
-        }
-        try {
-            pieces[static_cast<std::size_t>(task)] = job.execute(task, left, right, record, threads);
-        } catch (const Error& e) {
-            throw Error("task '" + job.describe(task) + "' failed: " + e.what());
-        } catch (const std::bad_alloc&) {
-            throw Error("task '" + job.describe(task) + "' failed: out of memory");
-        }
-        if (n.left >= 0) {
-            pieces[static_cast<std::size_t>(n.left)].reset();
-            pieces[static_cast<std::size_t>(n.right)].reset();
-        }
-        record.end = seconds();
-        if (placement) placement->finish(grant, record.end - record.start, record);
-        result.tasks.push_back(record);
-        queue.complete(task);
-        if (progress) progress(++done, job.task_count(), seconds());
-    }
-    result.surface = std::move(*pieces[0]);
-    result.seconds = seconds();
-    return result;
-}
-
-bool launched_with_mpi() {
-#ifdef TETISO_HAVE_MPI
-    for (const char* variable : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK", "MPI_LOCALNRANKS"})
-        if (std::getenv(variable)) return true;
-#endif
-    return false;
 }
 
 } // namespace tetiso

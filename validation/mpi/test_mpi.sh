@@ -61,7 +61,7 @@ fi
 # 4. The report holds one record per task, with its seconds by stage, and the
 #    timeline plot is drawn.
 #    Rank 0 runs the root seam, only seams, and only while no other task runs
-#    (schedule_mpi.cpp), for any number of workers.
+#    (core/job/scheduler.cpp), for any number of workers.
 for k in 2 3 4; do
     python3 - "$work/k$k.json" "$k" <<'PY' && ok || fail "report of the $k-rank run"
 import json, sys

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Faults of the MPI job as a cluster deals them: a worker killed mid-task
-# (SIGKILL, SIGTERM), a rank whose MPI transport cannot start, a worker out
-# of memory, a full disk under rank 0's output. Each must end the job within
+# (SIGKILL, SIGTERM), a worker or rank 0 that stops answering (SIGSTOP), a
+# rank whose MPI transport cannot start, a worker out of memory, a full disk
+# under rank 0's output. Each must end the job within
 # seconds, with a non-zero status, a message naming the task or the rank,
 # and no output or temporary file left behind.
 # Usage: test_mpi_faults.sh tetiso mpiexec [sanitized]
@@ -74,6 +75,49 @@ for signal in KILL TERM; do
     wait "$job"
     status=$?
     check "worker killed by SIG$signal" "$status" $(($(date +%s) - start)) 60 "rank 1 held task '"
+done
+
+# A rank that stops answering (SIGSTOP: a hung node looks the same): a
+# worker past its task's deadline is named by rank 0, a silent rank 0 by a
+# worker, and the job is aborted with status 2 before anything is written.
+# With --task-timeout 2 a task's deadline is at most 20 s (ten times the
+# floor, before any task's time is known), a silent rank 0's about 2 s.
+for rank in 1 0; do
+    rm -rf "$work/out" && mkdir "$work/out" && rm -f "$work/rank$rank.pid"
+    start=$(date +%s)
+    timeout 120 "$mpiexec" --oversubscribe -np 3 "$work/on_rank.sh" "$rank" "echo \$\$ >$work/rank$rank.pid" \
+        "$tetiso" run --lattice 120 --domains 27 --task-timeout 2 --quiet -o "$work/out/s.ply" \
+        --report "$work/out/r.json" >"$work/stdout" 2>"$work/stderr" &
+    job=$!
+    for _ in $(seq 100); do [ -s "$work/rank$rank.pid" ] && break; sleep 0.1; done
+    sleep 3 # start-up, then into the domain tasks
+    pid=$(cat "$work/rank$rank.pid")
+    kill -s STOP "$pid"
+    wait "$job"
+    status=$?
+    kill -s CONT "$pid" 2>/dev/null
+    if [ "$rank" = 1 ]; then
+        pattern="rank 1 stopped answering: its task '[^']+' did not end within [0-9]+ s"
+    else
+        pattern="rank 0 sent nothing for [0-9]+ s"
+    fi
+    check "rank $rank stopped" "$status" $(($(date +%s) - start)) 40 "$pattern"
+    [ "$status" -eq 2 ] || { echo "FAIL: rank $rank stopped: exit status $status, not 2"; failures=$((failures + 1)); }
+done
+
+# The deadline's floor is a number of seconds >= 0: anything else is refused
+# before any rank starts, in one line, with status 2.
+for bad in -1 nan inf abc; do
+    rm -rf "$work/out" && mkdir "$work/out"
+    "$tetiso" run --lattice 10 --task-timeout "$bad" -o "$work/out/s.ply" >"$work/stdout" 2>"$work/stderr"
+    status=$?
+    if [ "$status" -ne 2 ] || [ "$(wc -l <"$work/stderr")" -ne 1 ] || ! grep -q -- "--task-timeout" "$work/stderr" ||
+        [ -n "$(ls -A "$work/out")" ]; then
+        echo "FAIL: --task-timeout $bad: status $status: $(head -2 "$work/stderr")"
+        failures=$((failures + 1))
+    else
+        passed=$((passed + 1))
+    fi
 done
 
 # Rank 0's disk full under the output (a file-size limit): the write fails,

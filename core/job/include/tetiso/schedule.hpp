@@ -68,6 +68,11 @@ struct JobConfig {
     enum class Device { cpu, gpu, automatic };
     Device device = Device::cpu;
     int gpu = 0;
+    // The shortest deadline a task of an MPI job gets, in seconds: a task
+    // that has not ended max(this, 10 x its predicted seconds) after it was
+    // sent names its rank as stopped answering, and the job is aborted
+    // (core/job/scheduler.hpp); workers hold rank 0 to the same. 0: none.
+    double task_timeout = 60;
 };
 
 enum class TaskKind : std::int32_t { domain = 0, seam = 1 };
@@ -243,7 +248,9 @@ bool launched_with_mpi();
 // others work. The caller has initialised MPI. Returns the result on rank 0,
 // nullopt on workers; a task run by rank 0 is recorded with rank 0. A task
 // that throws, on any rank, ends the job on every rank: rank 0 throws
-// tetiso::Error naming the task and rank, workers throw JobStopped.
+// tetiso::Error naming the task and rank, workers throw JobStopped. A rank
+// that stops answering (JobConfig::task_timeout) is named on stderr, by rank 0
+// or, for rank 0, by a worker, and the job is aborted with status 2.
 std::optional<JobResult> run_mpi(const Job& job, const Progress& progress);
 
 // MPI for the lifetime of the object, when launched_with_mpi(); otherwise a

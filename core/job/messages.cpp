@@ -1,0 +1,188 @@
+// The job's messages and their codec (messages.hpp).
+#include "messages.hpp"
+
+#include <string_view>
+
+#include "byte_buffer.hpp"
+#include "tetiso/error.hpp"
+
+namespace tetiso {
+namespace {
+
+class Writer : public detail::ByteWriter<MessageBytes> {
+public:
+    void reserve(std::size_t more) { bytes.reserve(bytes.size() + more); }
+};
+
+class Reader : public detail::ByteReader {
+public:
+    explicit Reader(const MessageBytes& bytes)
+        : ByteReader(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                     [](const char*) { throw Error("truncated message between MPI ranks"); }) {}
+};
+
+// Bytes that put_piece(piece) appends: reserving them first keeps a large
+// message from growing by doubling, which on the root seam's worker held up
+// to twice the surface's size at once.
+std::size_t piece_size(const Piece& piece) {
+    const auto array = [](const auto& v) { return sizeof(std::uint64_t) + v.size() * sizeof(v[0]); };
+    return array(piece.x) + array(piece.y) + array(piece.z) + array(piece.key) + array(piece.flags) +
+           array(piece.triangles) + array(piece.domains) + array(piece.error) + array(piece.sample_xyz) +
+           array(piece.sample_triangle) + array(piece.sampled);
+}
+
+void put_piece(Writer& out, const Piece& piece) {
+    out.put_array(piece.x);
+    out.put_array(piece.y);
+    out.put_array(piece.z);
+    out.put_array(piece.key);
+    out.put_array(piece.flags);
+    out.put_array(piece.triangles);
+    out.put_array(piece.domains);
+    out.put_array(piece.error);
+    out.put_array(piece.sample_xyz);
+    out.put_array(piece.sample_triangle);
+    out.put_array(piece.sampled);
+}
+
+Piece get_piece(Reader& in) {
+    Piece piece;
+    piece.x = in.get_array<float>();
+    piece.y = in.get_array<float>();
+    piece.z = in.get_array<float>();
+    piece.key = in.get_array<EdgeKey>();
+    piece.flags = in.get_array<std::uint8_t>();
+    piece.triangles = in.get_array<std::int32_t>();
+    piece.domains = in.get_array<int>();
+    piece.error = in.get_array<float>();
+    piece.sample_xyz = in.get_array<float>();
+    piece.sample_triangle = in.get_array<std::int32_t>();
+    piece.sampled = in.get_array<std::uint8_t>();
+    return piece;
+}
+
+void put_string(Writer& out, const std::string& text) { out.put_array(std::vector<char>(text.begin(), text.end())); }
+
+std::string get_string(Reader& in) {
+    const auto chars = in.get_array<char>();
+    return std::string(chars.begin(), chars.end());
+}
+
+MessageBytes cores_only(const MessageBytes& cores) {
+    Writer out;
+    out.put_array(cores);
+    return std::move(out.bytes);
+}
+
+} // namespace
+
+MessageBytes encode(const ReadyMessage& message) { return cores_only(message.cores); }
+
+ReadyMessage decode_ready(const MessageBytes& bytes) {
+    Reader in(bytes);
+    return ReadyMessage{in.get_array<std::byte>()};
+}
+
+MessageBytes encode(const LendMessage& message) { return cores_only(message.cores); }
+
+LendMessage decode_lend(const MessageBytes& bytes) {
+    Reader in(bytes);
+    return LendMessage{in.get_array<std::byte>()};
+}
+
+MessageBytes encode(const TaskMessage& message) {
+    Writer out;
+    out.put(message.task);
+    out.put(message.gpu);
+    const bool seam = message.left && message.right;
+    out.put<std::int32_t>(seam ? 2 : 0);
+    if (seam) {
+        out.reserve(piece_size(*message.left) + piece_size(*message.right));
+        put_piece(out, *message.left);
+        put_piece(out, *message.right);
+    }
+    return std::move(out.bytes);
+}
+
+TaskMessage decode_task(const MessageBytes& bytes) {
+    Reader in(bytes);
+    TaskMessage message;
+    message.task = in.get<std::int32_t>();
+    message.gpu = in.get<std::int32_t>();
+    if (in.get<std::int32_t>() == 2) {
+        message.left = get_piece(in);
+        message.right = get_piece(in);
+    }
+    return message;
+}
+
+MessageBytes encode(const ResultMessage& message) {
+    Writer out;
+    out.put(message.task);
+    out.put(message.seconds);
+    out.put(message.threads);
+    out.put(message.triangles_in);
+    out.put(message.triangles_out);
+    out.put(message.samples_out);
+    out.put(message.stages);
+    out.put(message.field_low);
+    out.put(message.field_high);
+    out.reserve(piece_size(message.piece));
+    put_piece(out, message.piece);
+    return std::move(out.bytes);
+}
+
+ResultMessage decode_result(const MessageBytes& bytes) {
+    Reader in(bytes);
+    ResultMessage message;
+    message.task = in.get<std::int32_t>();
+    message.seconds = in.get<double>();
+    message.threads = in.get<std::int32_t>();
+    message.triangles_in = in.get<std::uint64_t>();
+    message.triangles_out = in.get<std::uint64_t>();
+    message.samples_out = in.get<std::uint64_t>();
+    message.stages = in.get<TaskRecord::Stages>();
+    message.field_low = in.get<float>();
+    message.field_high = in.get<float>();
+    message.piece = get_piece(in);
+    return message;
+}
+
+MessageBytes encode(const FailureMessage& message) {
+    Writer out;
+    out.put(message.task);
+    put_string(out, message.what);
+    return std::move(out.bytes);
+}
+
+FailureMessage decode_failure(const MessageBytes& bytes) {
+    Reader in(bytes);
+    FailureMessage message;
+    message.task = in.get<std::int32_t>();
+    message.what = get_string(in);
+    return message;
+}
+
+MessageBytes encode(const StopMessage& message) {
+    Writer out;
+    out.put<std::int32_t>(message.failed ? 1 : 0);
+    return std::move(out.bytes);
+}
+
+StopMessage decode_stop(const MessageBytes& bytes) {
+    Reader in(bytes);
+    return StopMessage{in.get<std::int32_t>() != 0};
+}
+
+MessageBytes encode(const HeartbeatMessage& message) {
+    Writer out;
+    out.put(message.seconds);
+    return std::move(out.bytes);
+}
+
+HeartbeatMessage decode_heartbeat(const MessageBytes& bytes) {
+    Reader in(bytes);
+    return HeartbeatMessage{in.get<double>()};
+}
+
+} // namespace tetiso

@@ -1,0 +1,388 @@
+// The job's scheduling policy (scheduler.hpp).
+#include "scheduler.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "tetiso/error.hpp"
+
+namespace tetiso {
+
+ResultMessage result_message(const TaskRecord& record, double seconds, int threads, Piece piece) {
+    ResultMessage result;
+    result.task = record.task;
+    result.seconds = seconds;
+    result.threads = threads;
+    result.triangles_in = record.triangles_in;
+    result.triangles_out = record.triangles_out;
+    result.samples_out = record.samples_out;
+    result.stages = record.stages;
+    result.field_low = record.field_low;
+    result.field_high = record.field_high;
+    result.piece = std::move(piece);
+    return result;
+}
+
+Scheduler::Scheduler(const Job& job, SchedulerSetup setup)
+    : job_(job), setup_(std::move(setup)), queue_(job), pieces_(static_cast<std::size_t>(job.task_count())),
+      cores_known_(static_cast<std::size_t>(setup_.ranks), false), lent_to_(static_cast<std::size_t>(setup_.ranks), -1),
+      size_sent_(static_cast<std::size_t>(job.task_count()), 1.0) {
+    result_.ranks = setup_.ranks;
+    if (!setup_.nodes) return;
+    const NodeLayout& nodes = *setup_.nodes;
+    node_of_ = nodes.node_of;
+    driving_ = nodes.driving;
+    const bool domains_on_cpu = job.config().device == JobConfig::Device::automatic;
+    std::vector<int> drivers(nodes.gpus.size(), 0); // by node
+    for (int r = 0; r < static_cast<int>(driving_.size()); ++r) {
+        const int node = node_of_[at(r)], gpu = driving_[at(r)];
+        if (gpu < 0) continue;
+        ++drivers[static_cast<std::size_t>(node)];
+        driver_of_gpu_[{node, gpu}] = r;
+    }
+    for (std::size_t node = 0; node < nodes.gpus.size(); ++node)
+        placements_.emplace_back(job, nodes.workers[node] - drivers[node], nodes.gpus[node], nodes.gpu_mib[node],
+                                 domains_on_cpu);
+}
+
+std::vector<SchedulerAction> Scheduler::decide(double now) {
+    std::vector<SchedulerAction> actions;
+    if (here_ >= 0) throw Error("the scheduler was asked what to do before the task it runs here ended");
+    if (should_run_here()) {
+        const int task = queue_.pop();
+        const TaskNode& n = job_.node(task);
+        size_sent_[static_cast<std::size_t>(task)] =
+            static_cast<double>(piece(n.left)->triangle_count() + piece(n.right)->triangle_count());
+        here_ = task;
+        SchedulerAction run;
+        run.kind = SchedulerAction::Kind::run_here;
+        run.task = task;
+        actions.push_back(std::move(run));
+        return actions;
+    }
+    if (placements_.empty()) {
+        while (!failure_ && !idle_.empty() && queue_.has_ready()) send_task(actions, take_idle(), queue_.pop(), -1, now);
+    } else {
+        while (!failure_ && queue_.has_ready()) {
+            const int node = node_with_room();
+            if (node < 0) break;
+            place(node, now);
+        }
+    }
+    if (!failure_) start_granted(actions, now);
+    else cancel_waiting();
+    if (!failure_ && !queue_.has_ready()) lend_idle_cores(actions);
+    return actions;
+}
+
+bool Scheduler::done() const { return running_.empty() && here_ < 0 && (failure_ || queue_.finished()); }
+
+void Scheduler::fail(int task, int rank, const std::string& what) {
+    if (!failure_) failure_ = SchedulerFailure{task, rank, what, false, 0};
+}
+
+// A seam the controller runs itself when no task is in flight and it is the
+// only one ready. Then every unfinished task is one of its ancestors (any
+// other would have a ready or running task below it), so nothing could start
+// before it ends, and no worker loses work while the controller computes and
+// answers nobody. That is always so for the root, and, because the queue
+// finishes subtrees early, in practice for every seam after the last domain
+// task. Run there, such a seam skips packing both pieces, the worker's
+// unpacking, and the same again for its result; and the root seam, which
+// holds the whole surface several times, takes no worker's memory. A looser
+// rule, with seams of other subtrees still in flight, could keep a finished
+// worker's result and the parent it readies waiting for the controller.
+bool Scheduler::should_run_here() const {
+    return setup_.seams_here && !failure_ && running_.empty() && waiting_.empty() && queue_.ready_count() == 1 &&
+           job_.kind(queue_.peek()) == TaskKind::seam;
+}
+
+const Piece* Scheduler::input(int task, bool right) const {
+    const TaskNode& n = job_.node(task);
+    const int child = right ? n.right : n.left;
+    if (child < 0) return nullptr;
+    const std::optional<Piece>& p = pieces_[static_cast<std::size_t>(child)];
+    return p ? &*p : nullptr;
+}
+
+void Scheduler::on_ready(int worker, bool cores_known, double) {
+    if (cores_known) cores_known_[at(worker)] = true;
+    idle_.push_back(worker);
+}
+
+void Scheduler::on_result(int rank, ResultMessage result, double now) {
+    const int task = result.task;
+    const TaskNode& n = job_.node(task);
+    TaskRecord record;
+    record.task = task;
+    record.kind = job_.kind(task);
+    record.first_domain = n.first;
+    record.domain_count = n.count;
+    record.rank = rank;
+    record.threads = result.threads;
+    record.triangles_in = result.triangles_in;
+    record.triangles_out = result.triangles_out;
+    record.samples_out = result.samples_out;
+    record.stages = result.stages;
+    record.field_low = result.field_low;
+    record.field_high = result.field_high;
+    record.end = now;
+    record.start = std::max(0.0, now - result.seconds);
+    const bool here = rank == 0 && task == here_;
+    if (here) {
+        here_ = -1;
+        piece(n.left).reset();
+        piece(n.right).reset();
+    } else {
+        if (const auto it = placed_.find(rank); it != placed_.end()) {
+            const Placed& p = it->second;
+            placements_[static_cast<std::size_t>(p.node)].finish(p.grant, result.seconds, record);
+            record.wait_seconds = p.sent_at - p.asked_at;
+            placed_.erase(it);
+        }
+        running_.erase(rank);
+        deadline_.erase(rank);
+        end_lends_to(rank);
+    }
+    learn(task, size_sent_[static_cast<std::size_t>(task)], result.seconds);
+    piece(task) = std::move(result.piece);
+    result_.tasks.push_back(record);
+    queue_.complete(task);
+    ++done_;
+    if (!here) idle_.push_back(rank);
+}
+
+void Scheduler::on_failure(int rank, int task, const std::string& what, double) {
+    fail(task, rank, what);
+    if (rank == 0 && task == here_) {
+        here_ = -1;
+        return;
+    }
+    if (const auto it = placed_.find(rank); it != placed_.end()) {
+        placements_[static_cast<std::size_t>(it->second.node)].manager.cancel(it->second.grant.ticket);
+        placed_.erase(it);
+    }
+    running_.erase(rank);
+    deadline_.erase(rank);
+    end_lends_to(rank);
+    idle_.push_back(rank);
+}
+
+void Scheduler::on_time(double now) {
+    if (failure_ && failure_->unresponsive) return;
+    for (const auto& [worker, deadline] : deadline_) {
+        if (now < deadline) continue;
+        const int task = running_.at(worker);
+        const double allowed = deadline - dispatched_at_[worker];
+        failure_ = SchedulerFailure{task, worker, "no answer within its deadline", true, allowed};
+        return;
+    }
+}
+
+double Scheduler::next_deadline() const {
+    double next = std::numeric_limits<double>::infinity();
+    for (const auto& [worker, deadline] : deadline_) next = std::min(next, deadline);
+    return next;
+}
+
+double Scheduler::task_size(int task) const { return size_sent_[static_cast<std::size_t>(task)]; }
+
+void Scheduler::learn(int task, double size, double seconds) {
+    const int kind = static_cast<int>(job_.kind(task));
+    models_[kind].add(size, seconds);
+    longest_[kind] = std::max(longest_[kind], seconds);
+}
+
+// The model's prediction for the task's size; while it has too few samples,
+// the longest task of the kind so far; 0 before any ended.
+double Scheduler::predicted_seconds(int task) const {
+    const int kind = static_cast<int>(job_.kind(task));
+    if (const auto it = models_.find(kind); it != models_.end())
+        if (const auto seconds = it->second.predict(task_size(task))) return std::max(*seconds, 0.0);
+    const auto it = longest_.find(kind);
+    return it == longest_.end() ? 0.0 : it->second;
+}
+
+double Scheduler::allowance(int task) const {
+    if (setup_.task_timeout <= 0) return std::numeric_limits<double>::infinity();
+    const double predicted = predicted_seconds(task);
+    if (predicted <= 0) return setup_.task_timeout * kUncalibratedDeadlineFactor;
+    return std::max(setup_.task_timeout, kDeadlineFactor * predicted);
+}
+
+// Lending. Once no task is ready, a worker without work lends its cores to a
+// running task (the one with the fewest lends, the latest started among
+// equals), which takes them at its next reduction round. The domain tasks'
+// times vary with the machine's noise, not with the domain, so the phase's
+// end is uneven whatever the order. A lent core comes back when its
+// borrower's task ends; a lender given a seam meanwhile shares it for that
+// seam's time. A GPU's driver neither lends (a task for its GPU may come at
+// any moment) nor borrows (its task runs on the GPU).
+void Scheduler::lend_idle_cores(std::vector<SchedulerAction>& actions) {
+    for (const int lender : idle_) {
+        if (lent_to_[at(lender)] >= 0 || !cores_known_[at(lender)] || drives_gpu(lender)) continue;
+        int borrower = -1;
+        for (const auto& [worker, task] : running_) {
+            if (!cores_known_[at(worker)] || runs_on_gpu(worker)) continue;
+            if (borrower < 0 || lends_[worker] < lends_[borrower] ||
+                (lends_[worker] == lends_[borrower] && dispatched_at_[worker] > dispatched_at_[borrower]))
+                borrower = worker;
+        }
+        if (borrower < 0) return;
+        SchedulerAction lend;
+        lend.kind = SchedulerAction::Kind::lend_cores;
+        lend.worker = borrower;
+        lend.lender = lender;
+        actions.push_back(std::move(lend));
+        lent_to_[at(lender)] = borrower;
+        ++lends_[borrower];
+    }
+}
+
+void Scheduler::end_lends_to(int borrower) {
+    for (int& to : lent_to_)
+        if (to == borrower) to = -1;
+    lends_.erase(borrower);
+}
+
+// An idle worker whose cores are not lent out, where there is one.
+int Scheduler::take_idle() {
+    auto it = std::find_if(idle_.begin(), idle_.end(), [&](int worker) { return lent_to_[at(worker)] < 0; });
+    if (it == idle_.end()) it = idle_.begin();
+    const int worker = *it;
+    idle_.erase(it);
+    return worker;
+}
+
+// Whether `worker`'s task runs on a GPU (its grant is for one).
+bool Scheduler::runs_on_gpu(int worker) const {
+    const auto it = placed_.find(worker);
+    return it != placed_.end() && placements_[static_cast<std::size_t>(it->second.node)].gpu_of(it->second.grant.device) >= 0;
+}
+
+bool Scheduler::drives_gpu(int worker) const { return !driving_.empty() && driving_[at(worker)] >= 0; }
+
+// The rank that drives the GPU of a node's manager device, -1 where none does
+// (the CPU, or the GPUs of a node with a lone worker).
+int Scheduler::driver_of(int node, int device) const {
+    const int gpu = placements_[static_cast<std::size_t>(node)].gpu_of(device);
+    const auto it = driver_of_gpu_.find({node, gpu});
+    return gpu < 0 || it == driver_of_gpu_.end() ? -1 : it->second;
+}
+
+// A node that can take another task: one of its processes is idle and not
+// already promised to a grant that waits (a driver to one for its GPU; the
+// other workers to those for the CPU). Placing a task only then, not as soon
+// as it is ready, keeps each device's queue as short as the predictions make
+// it worth, and lets a task's place be decided with the latest models. Nodes
+// are served in the order their processes became idle.
+int Scheduler::node_with_room() const {
+    std::map<int, int> free_workers; // node -> idle workers that drive no GPU, less the grants waiting for one
+    std::map<int, int> waiting_for;  // driver -> grants waiting for it
+    for (const int worker : idle_)
+        if (!drives_gpu(worker)) ++free_workers[node_of_[at(worker)]];
+    for (const Placed& p : waiting_) {
+        if (const int driver = driver_of(p.node, p.grant.device); driver >= 0)
+            ++waiting_for[driver];
+        else
+            --free_workers[p.node];
+    }
+    for (const int worker : idle_) {
+        const bool room = drives_gpu(worker) ? waiting_for[worker] == 0 : free_workers[node_of_[at(worker)]] > 0;
+        if (room) return node_of_[at(worker)];
+    }
+    return -1;
+}
+
+// Asks `node`'s manager where and when the next task runs; it waits for that
+// grant in waiting_.
+void Scheduler::place(int node, double now) {
+    const int task = queue_.pop();
+    const TaskNode& n = job_.node(task);
+    NodePlacement& placement = placements_[static_cast<std::size_t>(node)];
+    const Piece* left = n.left >= 0 ? &*piece(n.left) : nullptr;
+    const Piece* right = n.right >= 0 ? &*piece(n.right) : nullptr;
+    Placed p;
+    p.task = task;
+    p.node = node;
+    try {
+        p.grant = placement.manager.request(placement.request(task, left, right), now);
+    } catch (const Error& e) {
+        fail(task, 0, e.what());
+        return;
+    }
+    p.asked_at = now;
+    waiting_.push_back(p);
+}
+
+// The idle rank that runs a grant now: its GPU's driver, or an idle worker of
+// its node that drives none (one whose cores are not lent out where there is
+// one); -1 while none is idle.
+int Scheduler::executor_of(const Placed& p) const {
+    if (const int driver = driver_of(p.node, p.grant.device); driver >= 0)
+        return std::find(idle_.begin(), idle_.end(), driver) != idle_.end() ? driver : -1;
+    int lent = -1;
+    for (const int worker : idle_) {
+        if (drives_gpu(worker) || node_of_[at(worker)] != p.node) continue;
+        if (lent_to_[at(worker)] < 0) return worker;
+        if (lent < 0) lent = worker;
+    }
+    return lent;
+}
+
+// Sends the tasks whose grants their devices admit now, in the order they
+// were asked for (the manager keeps each device's order).
+void Scheduler::start_granted(std::vector<SchedulerAction>& actions, double now) {
+    for (auto it = waiting_.begin(); it != waiting_.end();) {
+        Placed& p = *it;
+        NodePlacement& placement = placements_[static_cast<std::size_t>(p.node)];
+        const int worker = executor_of(p);
+        if (worker < 0 || !placement.manager.start(p.grant.ticket, now)) {
+            ++it;
+            continue;
+        }
+        p.sent_at = now;
+        idle_.erase(std::find(idle_.begin(), idle_.end(), worker));
+        placed_[worker] = p;
+        send_task(actions, worker, p.task, placement.gpu_of(p.grant.device), now);
+        it = waiting_.erase(it);
+    }
+}
+
+// After a failure no task is sent: those waiting for a grant give it up.
+void Scheduler::cancel_waiting() {
+    for (const Placed& p : waiting_) placements_[static_cast<std::size_t>(p.node)].manager.cancel(p.grant.ticket);
+    waiting_.clear();
+}
+
+// gpu: where a domain task runs, GPU `gpu` of the worker's node or (-1) the
+// CPU. The pieces leave with the message: the controller keeps no copy.
+void Scheduler::send_task(std::vector<SchedulerAction>& actions, int worker, int task, int gpu, double now) {
+    const TaskNode& n = job_.node(task);
+    SchedulerAction send;
+    send.kind = SchedulerAction::Kind::send_task;
+    send.worker = worker;
+    send.task = task;
+    send.message.task = task;
+    send.message.gpu = gpu;
+    if (n.left >= 0) {
+        size_sent_[static_cast<std::size_t>(task)] =
+            static_cast<double>(piece(n.left)->triangle_count() + piece(n.right)->triangle_count());
+        send.message.left = std::move(piece(n.left));
+        send.message.right = std::move(piece(n.right));
+        piece(n.left).reset();
+        piece(n.right).reset();
+    }
+    running_[worker] = task;
+    dispatched_at_[worker] = now;
+    deadline_[worker] = now + allowance(task);
+    actions.push_back(std::move(send));
+}
+
+JobResult Scheduler::take_result(double now) {
+    result_.surface = std::move(*pieces_[0]);
+    result_.seconds = now;
+    return std::move(result_);
+}
+
+} // namespace tetiso
