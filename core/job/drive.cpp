@@ -65,7 +65,8 @@ std::optional<JobResult> drive(const Job& job, Scheduler& scheduler, Transport& 
             break;
         }
     }
-    transport.stop(scheduler.failure().has_value());
+    if (const int silent = transport.stop(scheduler.failure().has_value()); silent >= 0)
+        scheduler.on_silent(silent);
     if (scheduler.failure()) return std::nullopt;
     return scheduler.take_result(transport.clock());
 }

@@ -21,7 +21,7 @@ public:
     void lend_cores(int, int) override {}
     std::optional<WorkerEvent> receive(double deadline) override;
     double clock() const override;
-    void stop(bool) override {}
+    int stop(bool) override { return -1; }
 
 private:
     const Job& job_;

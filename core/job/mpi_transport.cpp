@@ -149,20 +149,40 @@ std::optional<WorkerEvent> MpiTransport::receive(double deadline) {
 
 // Every worker's first "ready" is received before it is told to stop, so no
 // message is left unmatched at MPI_Finalize; heartbeats stop before the stop
-// goes out, which the workers read after them.
-void MpiTransport::stop(bool failed) {
+// goes out, which the workers read after them. Each worker answers the stop:
+// one that does not, within the deadlines' floor, stopped answering while it
+// held no task, and MPI_Finalize would wait for it for ever.
+int MpiTransport::stop(bool failed) {
+    // A worker not ready yet may still be preparing its GPU: it gets ten
+    // floors.
+    const Clock::time_point ready_by = task_timeout_ > 0 ? deadline_in(10 * task_timeout_) : Clock::time_point::max();
     for (int worker = 1; worker < ranks_; ++worker)
         if (!greeted_[static_cast<std::size_t>(worker)]) {
             MPI_Status status;
-            wait_for_message(worker, status, Clock::time_point::max(), [this] {
+            const bool ready = wait_for_message(worker, status, ready_by, [this] {
                 sends_.progress();
                 heartbeat_if_due();
             });
+            if (!ready) return worker;
             receive_probed(status);
         }
     stopped_ = true;
     for (int worker = 1; worker < ranks_; ++worker) sends_.send(encode(StopMessage{failed}), worker, kStop);
+    const Clock::time_point deadline = task_timeout_ > 0 ? deadline_in(task_timeout_) : Clock::time_point::max();
+    for (int worker = 1; worker < ranks_; ++worker) {
+        MPI_Status status;
+        Backoff backoff;
+        for (int arrived = 0;;) {
+            MPI_Iprobe(worker, kStopped, MPI_COMM_WORLD, &arrived, &status);
+            if (arrived) break;
+            sends_.progress();
+            if (Clock::now() >= deadline) return worker;
+            backoff.pause();
+        }
+        receive_probed(status);
+    }
     sends_.wait(Clock::time_point::max());
+    return -1;
 }
 
 } // namespace tetiso

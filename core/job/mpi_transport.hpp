@@ -21,7 +21,8 @@
 
 namespace tetiso {
 
-enum MessageTag : int { kReady = 1, kTask = 2, kResult = 3, kFailure = 4, kStop = 5, kLend = 6, kHeartbeat = 7 };
+// kStopped: a worker's answer to kStop, an empty message.
+enum MessageTag : int { kReady = 1, kTask = 2, kResult = 3, kFailure = 4, kStop = 5, kLend = 6, kHeartbeat = 7, kStopped = 8 };
 
 // A wait's pause between polls: short at first, so that a message arriving
 // soon costs at most kShortPause of latency (tasks take 10^-2 to 1 s), and
@@ -90,7 +91,7 @@ public:
     std::optional<WorkerEvent> receive(double deadline) override;
     void busy_for(double seconds) override;
     double clock() const override;
-    void stop(bool failed) override;
+    int stop(bool failed) override;
 
     // The union of rank 0's cores and every ready worker's; false where rank
     // 0's are not known.

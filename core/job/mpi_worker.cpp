@@ -134,6 +134,7 @@ void work(const Job& job, int driven_gpu) {
         rank_zero.heard(message, status.MPI_TAG);
         if (status.MPI_TAG == kLend || status.MPI_TAG == kHeartbeat) continue; // a lend for a task that ended before it came
         if (status.MPI_TAG == kStop) {
+            deliver(MessageBytes(), kStopped);
             if (decode_stop(message).failed) throw JobStopped();
             return;
         }

@@ -87,10 +87,16 @@ JobResult control(const Job& job, int ranks, const Progress& progress, const std
         // Nothing is written yet; the stopped rank cannot be told to stop,
         // and MPI_Finalize would wait for it: the launcher ends every rank.
         in_flight.disarm();
-        std::fprintf(stderr,
-                     "tetiso: rank %d stopped answering: its task '%s' did not end within %.0f s (the deadline; "
-                     "--task-timeout sets it); the job is stopped\n",
-                     failure.rank, job.describe(failure.task).c_str(), failure.allowed_seconds);
+        if (failure.task >= 0)
+            std::fprintf(stderr,
+                         "tetiso: rank %d stopped answering: its task '%s' did not end within %.0f s (the deadline; "
+                         "--task-timeout sets it); the job is stopped\n",
+                         failure.rank, job.describe(failure.task).c_str(), failure.allowed_seconds);
+        else
+            std::fprintf(stderr,
+                         "tetiso: rank %d stopped answering: it did not answer the end of the job within %.0f s "
+                         "(--task-timeout); the job is stopped\n",
+                         failure.rank, failure.allowed_seconds);
         std::fflush(stderr);
         MPI_Abort(MPI_COMM_WORLD, 2);
         std::abort();

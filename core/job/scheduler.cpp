@@ -141,7 +141,6 @@ void Scheduler::on_result(int rank, ResultMessage result, double now) {
             placed_.erase(it);
         }
         running_.erase(rank);
-        deadline_.erase(rank);
         end_lends_to(rank);
     }
     learn(task, size_sent_[static_cast<std::size_t>(task)], result.seconds);
@@ -163,25 +162,27 @@ void Scheduler::on_failure(int rank, int task, const std::string& what, double) 
         placed_.erase(it);
     }
     running_.erase(rank);
-    deadline_.erase(rank);
     end_lends_to(rank);
     idle_.push_back(rank);
 }
 
 void Scheduler::on_time(double now) {
     if (failure_ && failure_->unresponsive) return;
-    for (const auto& [worker, deadline] : deadline_) {
-        if (now < deadline) continue;
-        const int task = running_.at(worker);
-        const double allowed = deadline - dispatched_at_[worker];
+    for (const auto& [worker, task] : running_) {
+        const double allowed = allowance(task);
+        if (now < dispatched_at_[worker] + allowed) continue;
         failure_ = SchedulerFailure{task, worker, "no answer within its deadline", true, allowed};
         return;
     }
 }
 
+void Scheduler::on_silent(int worker) {
+    failure_ = SchedulerFailure{-1, worker, "no answer to the end of the job", true, setup_.task_timeout};
+}
+
 double Scheduler::next_deadline() const {
     double next = std::numeric_limits<double>::infinity();
-    for (const auto& [worker, deadline] : deadline_) next = std::min(next, deadline);
+    for (const auto& [worker, task] : running_) next = std::min(next, dispatched_at_.at(worker) + allowance(task));
     return next;
 }
 
@@ -194,19 +195,20 @@ void Scheduler::learn(int task, double size, double seconds) {
 }
 
 // The model's prediction for the task's size; while it has too few samples,
-// the longest task of the kind so far; 0 before any ended.
+// the longest task of the kind so far, or of any kind; 0 before any ended.
 double Scheduler::predicted_seconds(int task) const {
     const int kind = static_cast<int>(job_.kind(task));
     if (const auto it = models_.find(kind); it != models_.end())
         if (const auto seconds = it->second.predict(task_size(task))) return std::max(*seconds, 0.0);
-    const auto it = longest_.find(kind);
-    return it == longest_.end() ? 0.0 : it->second;
+    if (const auto it = longest_.find(kind); it != longest_.end()) return it->second;
+    double longest = 0;
+    for (const auto& [k, seconds] : longest_) longest = std::max(longest, seconds);
+    return longest;
 }
 
 double Scheduler::allowance(int task) const {
-    if (setup_.task_timeout <= 0) return std::numeric_limits<double>::infinity();
     const double predicted = predicted_seconds(task);
-    if (predicted <= 0) return setup_.task_timeout * kUncalibratedDeadlineFactor;
+    if (setup_.task_timeout <= 0 || predicted <= 0) return std::numeric_limits<double>::infinity();
     return std::max(setup_.task_timeout, kDeadlineFactor * predicted);
 }
 
@@ -375,7 +377,6 @@ void Scheduler::send_task(std::vector<SchedulerAction>& actions, int worker, int
     }
     running_[worker] = task;
     dispatched_at_[worker] = now;
-    deadline_[worker] = now + allowance(task);
     actions.push_back(std::move(send));
 }
 

@@ -19,7 +19,8 @@
 // their cores to running tasks. A task that fails stops the handing out;
 // the job ends when nothing runs. A task that has not ended by its deadline
 // — max(floor, kDeadlineFactor x its predicted seconds) after it was sent —
-// names its rank as stopped answering.
+// names its rank as stopped answering; the prediction is the latest, so a
+// task sent before any had ended gets its deadline once one has.
 #pragma once
 
 #include <deque>
@@ -64,7 +65,7 @@ struct SchedulerSetup {
 
 // Why the job failed: a task that threw, or a rank that stopped answering.
 struct SchedulerFailure {
-    int task = -1;
+    int task = -1; // -1: the rank held no task
     int rank = 0;
     std::string what;
     bool unresponsive = false; // the rank holds the task still: it cannot be stopped in order
@@ -79,9 +80,6 @@ class Scheduler {
 public:
     // A task's deadline is at least this many times its predicted seconds.
     static constexpr double kDeadlineFactor = 10;
-    // Before any task of its kind has ended, a task's deadline is this many
-    // times the floor: nothing says yet how long tasks take.
-    static constexpr double kUncalibratedDeadlineFactor = 10;
 
     Scheduler(const Job& job, SchedulerSetup setup);
 
@@ -96,11 +94,15 @@ public:
     void on_failure(int rank, int task, const std::string& what, double now);
     // Time passed: a task past its deadline fails the job as unresponsive.
     void on_time(double now);
+    // A worker that did not answer the end of the job (it held no task)
+    // fails it as unresponsive.
+    void on_silent(int worker);
 
     // When on_time next has something to check (infinity: never).
     double next_deadline() const;
     // The seconds a task is given from when it is sent, under the
-    // predictions now.
+    // predictions now: infinity before any task has ended (nothing says yet
+    // how long tasks take) or without a floor.
     double allowance(int task) const;
 
     // Nothing runs, and the job either finished or failed.
@@ -157,7 +159,6 @@ private:
     std::vector<int> lent_to_;            // lender -> borrower
     std::map<int, int> lends_;            // borrower -> lends it has
     std::map<int, double> dispatched_at_; // worker -> when its task was sent
-    std::map<int, double> deadline_;      // worker -> when its task must have ended
     std::vector<double> size_sent_;       // by task: its size when sent (task_size)
     // How long each kind of task took here, for the deadlines: a model over
     // the task's size (PerformanceModel) and the longest seen.

@@ -37,9 +37,10 @@ public:
     virtual void busy_for(double seconds) { (void)seconds; }
     // Seconds since the job started.
     virtual double clock() const = 0;
-    // Every worker told that the job ended (`failed`: on an error); returns
-    // once none is left waiting on a message.
-    virtual void stop(bool failed) = 0;
+    // Every worker told that the job ended (`failed`: on an error), and
+    // each one's answer awaited; returns a rank that did not answer within
+    // its deadline (it stopped answering while it held no task), or -1.
+    virtual int stop(bool failed) = 0;
 };
 
 // What the controller does around a task it runs itself, and a task's

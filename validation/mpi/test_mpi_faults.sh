@@ -80,8 +80,8 @@ done
 # A rank that stops answering (SIGSTOP: a hung node looks the same): a
 # worker past its task's deadline is named by rank 0, a silent rank 0 by a
 # worker, and the job is aborted with status 2 before anything is written.
-# With --task-timeout 2 a task's deadline is at most 20 s (ten times the
-# floor, before any task's time is known), a silent rank 0's about 2 s.
+# With --task-timeout 2 a task's deadline is 2 s or ten times its predicted
+# time (domains take about a second here), a silent rank 0's about 2 s.
 for rank in 1 0; do
     rm -rf "$work/out" && mkdir "$work/out" && rm -f "$work/rank$rank.pid"
     start=$(date +%s)

@@ -64,6 +64,7 @@ public:
     std::function<double(int task, int worker)> duration = [](int, int) { return 1.0; };
     std::set<int> stopped, failing;
     bool execute = false;
+    int silent_at_stop = -1; // a worker that does not answer the stop
 
     void send_task(int worker, TaskMessage message) override {
         sent.push_back({now_, worker, message.task, message.gpu});
@@ -101,7 +102,10 @@ public:
     }
     void busy_for(double seconds) override { busy.push_back(seconds); }
     double clock() const override { return now_; }
-    void stop(bool failed) override { stops.push_back(failed); }
+    int stop(bool failed) override {
+        stops.push_back(failed);
+        return silent_at_stop;
+    }
     void advance(double seconds) { now_ += seconds; }
 
     std::vector<Sent> sent;
@@ -384,8 +388,8 @@ TEST(Scheduler, AStoppedWorkerIsNamedAtItsTasksDeadline) {
     const double floor = 5;
     FakeTransport transport(job, {1, 2, 3}, false);
     Scheduler scheduler(job, mpi_setup(4, floor));
-    // Three domain tasks sent at 0, none calibrated: ten floors each.
-    EXPECT_EQ(scheduler.allowance(queue_order(job, 1)[0]), Scheduler::kUncalibratedDeadlineFactor * floor);
+    // Before any task ended nothing says how long one takes: no deadline yet.
+    EXPECT_TRUE(std::isinf(scheduler.allowance(queue_order(job, 1)[0])));
     // Domains take 0.2 s; worker 2 stops in its second task, a domain.
     int stopped_task = -1;
     transport.duration = [&](int task, int worker) {
@@ -407,6 +411,39 @@ TEST(Scheduler, AStoppedWorkerIsNamedAtItsTasksDeadline) {
     EXPECT_DOUBLE_EQ(f.allowed_seconds, floor);
     EXPECT_DOUBLE_EQ(transport.clock(), 0.2 + floor);
     EXPECT_TRUE(transport.stops.empty()) << "a stopped rank cannot be stopped in order";
+}
+
+TEST(Scheduler, AWorkerStoppedInItsFirstTaskGetsADeadlineOnceAnotherTaskEnds) {
+    const Job job(lattice_job(12, 27));
+    FakeTransport transport(job, {1, 2, 3}, false);
+    transport.stopped = {2};
+    transport.duration = [](int, int worker) { return worker == 1 ? 1.0 : 1.5; };
+    Scheduler scheduler(job, mpi_setup(4, 2));
+    EXPECT_FALSE(drive(job, scheduler, transport, hooks_here(transport, job, 0.1)).has_value());
+    ASSERT_TRUE(scheduler.failure().has_value());
+    EXPECT_TRUE(scheduler.failure()->unresponsive);
+    EXPECT_EQ(scheduler.failure()->rank, 2);
+    EXPECT_EQ(scheduler.failure()->task, transport.sent[1].task);
+    // Sent at 0, it had no deadline until a domain ended (at 1 s); then ten
+    // times the domains' predicted time, a mean of 1 s and 1.5 s ones, and
+    // the job noticed it right then.
+    const double allowed = scheduler.failure()->allowed_seconds;
+    EXPECT_GT(allowed, Scheduler::kDeadlineFactor * 1.0);
+    EXPECT_LT(allowed, Scheduler::kDeadlineFactor * 1.5);
+    EXPECT_DOUBLE_EQ(transport.clock(), allowed);
+}
+
+TEST(Scheduler, AWorkerSilentAtTheEndFailsTheJobAsUnresponsive) {
+    const Job job(lattice_job(12, 8));
+    FakeTransport transport(job, {1, 2}, false);
+    transport.silent_at_stop = 2;
+    Scheduler scheduler(job, mpi_setup(3, 5));
+    EXPECT_FALSE(drive(job, scheduler, transport, hooks_here(transport, job, 0.1)).has_value());
+    ASSERT_TRUE(scheduler.failure().has_value());
+    EXPECT_TRUE(scheduler.failure()->unresponsive);
+    EXPECT_EQ(scheduler.failure()->rank, 2);
+    EXPECT_EQ(scheduler.failure()->task, -1) << "it held no task";
+    EXPECT_EQ(transport.stops, std::vector<bool>{false}) << "every task had ended";
 }
 
 TEST(Scheduler, DeadlinesScaleWithThePredictedTimeAndCanBeOff) {

@@ -70,8 +70,9 @@ struct JobConfig {
     int gpu = 0;
     // The shortest deadline a task of an MPI job gets, in seconds: a task
     // that has not ended max(this, 10 x its predicted seconds) after it was
-    // sent names its rank as stopped answering, and the job is aborted
-    // (core/job/scheduler.hpp); workers hold rank 0 to the same. 0: none.
+    // sent (no deadline before some task has ended) names its rank as
+    // stopped answering, and the job is aborted (core/job/scheduler.hpp);
+    // workers hold rank 0 to the same. 0: none.
     double task_timeout = 60;
 };
 
