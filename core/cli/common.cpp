@@ -14,6 +14,8 @@
 #include "commands.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/io.hpp"
+#include "tetiso/mesh_file.hpp"
+#include "tetiso/pvtu.hpp"
 
 namespace tetiso::cli {
 
@@ -94,6 +96,55 @@ void require_writable(const std::filesystem::path& path) {
     if (::access(directory.c_str(), W_OK) != 0)
         throw Error(path.string() + ": cannot write: directory " + directory.string() + " is not writable");
     if (std::filesystem::is_directory(path, ec)) throw Error(path.string() + ": cannot write: it is a directory");
+}
+
+void require_distinct_files(const std::vector<NamedFile>& outputs, const std::vector<NamedFile>& inputs) {
+    const auto describe = [](const NamedFile& file) { return file.path.string() + " (" + file.option + ")"; };
+    for (std::size_t i = 0; i < outputs.size(); ++i) {
+        if (outputs[i].path.empty()) continue; // an output not asked for
+        const std::filesystem::path target = detail::output_target(outputs[i].path);
+        for (std::size_t j = 0; j < i; ++j)
+            if (!outputs[j].path.empty() && detail::same_file(detail::output_target(outputs[j].path), target))
+                throw Error(describe(outputs[i]) + ": cannot write: it is the same file as the output " +
+                            describe(outputs[j]) + "; give each output a path of its own");
+        for (const NamedFile& input : inputs)
+            if (detail::same_file(input.path, target))
+                throw Error(describe(outputs[i]) + ": cannot write: it is the same file as the input " +
+                            describe(input) + ", which it would replace");
+    }
+}
+
+std::vector<NamedFile> mesh_files(const std::filesystem::path& mesh) {
+    std::vector<NamedFile> files;
+    switch (mesh_format(mesh)) {
+    case MeshFormat::tetgen: {
+        const std::string extension = mesh.extension().string();
+        const std::filesystem::path base =
+            extension == ".node" || extension == ".ele" ? mesh.parent_path() / mesh.stem() : mesh;
+        files.push_back({"--mesh", base.string() + ".node"});
+        files.push_back({"--mesh", base.string() + ".ele"});
+        break;
+    }
+    case MeshFormat::pvtu:
+        files.push_back({"--mesh", mesh});
+        for (const std::filesystem::path& piece : read_pvtu_index(mesh).pieces)
+            files.push_back({"a piece of --mesh", piece});
+        break;
+    default: files.push_back({"--mesh", mesh});
+    }
+    return files;
+}
+
+std::vector<NamedFile> split_files(const std::filesystem::path& dir) {
+    std::vector<NamedFile> files;
+    std::error_code ec;
+    std::filesystem::directory_iterator entries(dir, ec);
+    if (ec) return files; // the split's reader says what is wrong with it
+    for (; entries != std::filesystem::directory_iterator(); entries.increment(ec)) {
+        if (ec) break;
+        files.push_back({"a file of --split", entries->path()});
+    }
+    return files;
 }
 
 void write_report(const nlohmann::json& report, const std::filesystem::path& path, OutputFiles& output) {

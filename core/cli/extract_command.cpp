@@ -145,6 +145,8 @@ void run_extract(const ExtractArguments& args) {
         throw Error("--mesh reads one domain; --domains applies to the lattice only");
     if ((args.attribute || !args.array.empty() || !args.node_ids.empty()) && args.mesh.empty())
         throw Error("--attribute, --array and --node-ids need --mesh");
+    require_distinct_files({{"-o", args.output}, {"--report", args.report}},
+                           args.mesh.empty() ? std::vector<NamedFile>{} : mesh_files(args.mesh));
     const std::unique_ptr<Field> field = make_field(args.field);
     if (!args.mesh.empty()) return run_extract_mesh(args, *field, start);
     const Lattice lattice(args.lattice);

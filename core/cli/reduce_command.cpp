@@ -68,6 +68,7 @@ void run_reduce(const ReduceArguments& args) {
     surface_format(args.output);
     require_writable(args.output);
     if (!args.report.empty()) require_writable(args.report);
+    require_distinct_files({{"-o", args.output}, {"--report", args.report}}, {{"input", args.input}});
     const std::unique_ptr<Gpu> gpu = open_gpu(args.device);
     const Piece input = read_piece(args.input);
     ReduceOptions options = args.options;

@@ -125,6 +125,9 @@ void run_job(const RunArguments& args) {
             surface_format(args.output);
             require_writable(args.output);
             if (!args.report.empty()) require_writable(args.report);
+            std::vector<NamedFile> inputs = args.job.mesh.empty() ? split_files(args.job.split) : mesh_files(args.job.mesh);
+            if (!args.job.partition.empty()) inputs.push_back({"--partition", args.job.partition});
+            require_distinct_files({{"-o", args.output}, {"--report", args.report}}, inputs);
         } catch (const Error& e) {
             output_problem = e.what();
         }

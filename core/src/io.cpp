@@ -2,6 +2,7 @@
 #include "tetiso/io.hpp"
 
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -94,6 +95,20 @@ void remove_stale_temporaries(const std::filesystem::path& target) {
         std::error_code ignored;
         std::filesystem::remove_all(entry.path(), ignored);
     }
+}
+
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
+    struct stat at {}, bt {};
+    if (::stat(a.c_str(), &at) == 0 && ::stat(b.c_str(), &bt) == 0)
+        return at.st_dev == bt.st_dev && at.st_ino == bt.st_ino;
+    const auto resolved = [](const std::filesystem::path& path) {
+        std::error_code ec;
+        std::filesystem::path absolute = std::filesystem::absolute(path, ec);
+        if (ec) absolute = path;
+        std::filesystem::path canonical = std::filesystem::weakly_canonical(absolute, ec);
+        return ec ? absolute.lexically_normal() : canonical;
+    };
+    return resolved(a) == resolved(b);
 }
 
 std::string name_output_in(std::string message, const std::filesystem::path& temporary,

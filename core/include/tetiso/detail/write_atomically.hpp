@@ -21,6 +21,10 @@ std::filesystem::path temporary_sibling(const std::filesystem::path& target);
 // Removes the temporaries beside `target` whose writing process is gone
 // (killed by SIGKILL or SIGXFSZ, say, before it could remove them).
 void remove_stale_temporaries(const std::filesystem::path& target);
+// Whether `a` and `b` name one file: the same device and inode where both
+// exist (through links, hard links, "./" and ".."), else the same path once
+// made absolute with every link resolved.
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b);
 // The message of an error a writer raised naming its temporary file, with
 // the output's path in its place.
 std::string name_output_in(std::string message, const std::filesystem::path& temporary,
@@ -41,10 +45,14 @@ public:
     ~OutputFiles() { discard(); }
 
     // Runs `write` with the temporary path of `path`. An Error it throws
-    // names `path`, not the temporary.
+    // names `path`, not the temporary. Throws tetiso::Error when `path` is
+    // the same file as an earlier output: the later rename would replace it.
     template <class WriteFunction>
     void add(const std::filesystem::path& path, WriteFunction&& write) {
         const std::filesystem::path target = detail::output_target(path);
+        for (const Pending& p : pending_)
+            if (detail::same_file(p.target, target))
+                throw Error(path.string() + ": cannot write: it is the same file as the output " + p.path.string());
         detail::remove_stale_temporaries(target);
         pending_.push_back({path, target, detail::temporary_sibling(target)});
         const std::filesystem::path& temporary = pending_.back().temporary;
