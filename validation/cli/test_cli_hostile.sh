@@ -52,5 +52,31 @@ unchanged "$work/cube.1.node" "$node_sum"
 expect 2 "run's report over its partition file" -- "$tetiso" run --mesh "$work/cube.1" --domains 2 --partition "$work/cube.1.node" -o "$out/t.ply" --report "$work/cube.1.node"
 unchanged "$work/cube.1.node" "$node_sum"
 
+# Inputs that are not regular files: refused, never read (a device has no
+# end, a pipe may never open). Under a memory and time limit, so that a
+# reader that does read them fails here rather than eats the machine.
+limited() { bash -c 'ulimit -v 1500000; exec timeout 20 "$@"' - "$@"; }
+ln -s /dev/zero "$work/zero.ply"
+ln -s /dev/zero "$work/zero.vtu"
+ln -s /dev/zero "$work/zero.msh"
+ln -s /dev/zero "$work/zero.node" && cp "$meshes/cube.1.ele" "$work/zero.ele"
+mkfifo "$work/fifo.vtu" "$work/fifo.part"
+sed 's|Source="pieces_1.vtu"|Source="/dev/zero"|' "$meshes/solver/pieces.pvtu" >"$work/zero.pvtu"
+cp "$meshes"/solver/pieces_*.vtu "$work/"
+for input in "check $work/zero.ply" "reduce $work/zero.ply -o $out/r.ply" "extract --mesh $work/zero.vtu -o $out/t.ply" \
+    "extract --mesh $work/zero.msh -o $out/t.ply" "extract --mesh $work/zero -o $out/t.ply" \
+    "extract --mesh $work/fifo.vtu -o $out/t.ply" "extract --mesh $work/zero.pvtu --array distance -o $out/t.ply" \
+    "run --mesh $work/zero.pvtu --array distance --quiet -o $out/t.ply" \
+    "split --mesh $work/zero.pvtu --array distance -o $out/s" \
+    "run --mesh $meshes/cube.1 --partition $work/fifo.part --quiet -o $out/t.ply"; do
+    # shellcheck disable=SC2086 # the case is several arguments
+    expect 2 "not a regular file: $input" -- limited "$tetiso" $input
+    says "not a regular file"
+done
+"$tetiso" split --mesh "$meshes/cube.1" --field sphere --domains 2 --quiet -o "$work/split2"
+rm "$work/split2/domain-1.tetiso" && ln -s /dev/zero "$work/split2/domain-1.tetiso"
+expect 2 "a split file that is a link to /dev/zero" -- limited "$tetiso" run --split "$work/split2" --quiet -o "$out/t.ply"
+says "domain-1.tetiso: not a regular file"
+
 echo "$passed passed, $failures failed"
 [ "$failures" -eq 0 ]
