@@ -33,6 +33,20 @@ void add_phi_option(CLI::App& cmd, double& phi);
 // "non-negative" test, and CLI11's own messages print ranges of 300 digits).
 // A count of domains: a whole number, at least 1.
 const CLI::Validator& domain_count_check();
+// An index (--gpu, --attribute): a whole number, at least 0.
+const CLI::Validator& index_check();
+// --phi: a number in (0, 1] (0 and NaN are not).
+const CLI::Validator& phi_check();
+// Makes every integer option of `app` and its subcommands read decimal
+// digits only (an optional sign, leading zeros ignored: "032" is 32, "0x20"
+// is refused), before any other check of the option. For main(), once every
+// option is added.
+void require_decimal_integers(CLI::App& app);
+// Refuses, in every subcommand of `app`, options that mean nothing together
+// or given empty: --array with --field or --attribute, --attribute with
+// --field, --vertices-only without --against, '' as a file or array name.
+// For main(), once every option is added.
+void refuse_meaningless_combinations(CLI::App& app);
 // A distance bound: a finite number, at least 0.
 const CLI::Validator& error_bound_check();
 // --threads: 0 (all cores) to kMaxThreads.

@@ -253,7 +253,7 @@ void add_extract_command(CLI::App& app, Command& run) {
     cmd->add_option_function<int>(
         "--attribute", [args](int k) { args->attribute = k; },
         "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
-        ->check(CLI::NonNegativeNumber);
+        ->check(index_check());
     cmd->add_option("--domains", args->domains, "Number of domains (recursive coordinate bisection)")
         ->check(domain_count_check());
     cmd->add_option("--field", args->field,

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "commands.hpp"
+#include "tetiso/detail/write_atomically.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/schedule.hpp"
 
@@ -63,6 +64,9 @@ int main(int argc, char** argv) {
     // the writer reports and cleans up after, instead of killing the process
     // with SIGXFSZ and leaving its temporary file behind.
     std::signal(SIGXFSZ, SIG_IGN);
+    // Ctrl-C, a job's end (SIGTERM) or a closed terminal (SIGHUP) during a
+    // write removes the outputs' temporaries before the process ends.
+    tetiso::detail::remove_temporaries_on_signals();
     CLI::App app{"tetiso: reduced isosurfaces of large tetrahedral meshes, in parallel"};
     app.require_subcommand(1);
     app.set_version_flag("--version", "tetiso 0.1.0");
@@ -72,6 +76,8 @@ int main(int argc, char** argv) {
     tetiso::cli::add_run_command(app, run);
     tetiso::cli::add_reduce_command(app, run);
     tetiso::cli::add_split_command(app, run);
+    tetiso::cli::require_decimal_integers(app);
+    tetiso::cli::refuse_meaningless_combinations(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

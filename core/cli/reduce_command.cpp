@@ -24,7 +24,7 @@ double mean_edge_length(const Piece& piece) {
 
 void add_phi_option(CLI::App& cmd, double& phi) {
     cmd.add_option("--phi", phi, "Reduction threshold PHI* in (0, 1]: an edge collapses when its PHI exceeds it")
-        ->check(CLI::Range(0.0, 1.0).description("in (0, 1]"))
+        ->check(phi_check())
         ->capture_default_str();
 }
 

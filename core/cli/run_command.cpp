@@ -236,6 +236,7 @@ void add_run_command(CLI::App& app, Command& run) {
     cmd->add_option_function<int>(
            "--attribute", [args](int k) { args->job.attribute = k; },
            "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
+        ->check(index_check())
         ->needs(mesh);
     cmd->add_option("--array", job.array, "With a .vtu, .pvtu or .msh: the field is this point array ($NodeData view)")
         ->needs(mesh);

@@ -57,6 +57,14 @@ std::ifstream open_for_reading(const std::filesystem::path& path);
 // than the size the file had when opened.
 std::string read_whole_file(const std::filesystem::path& path);
 
+// Where an ASCII number starting at `at` begins for std::from_chars: past a
+// leading '+' followed by a digit or a point, which C's strtod and scanf
+// take (and so VTK, Gmsh and TetGen) and from_chars does not; "+-1" and a
+// '+' alone stay refused.
+inline const char* past_plus(const char* at, const char* end) {
+    return end - at > 1 && *at == '+' && ((at[1] >= '0' && at[1] <= '9') || at[1] == '.') ? at + 1 : at;
+}
+
 // Checks indices and coordinates and restores the key order; shared by readers.
 void validate_and_order(Piece& piece, const std::filesystem::path& path);
 

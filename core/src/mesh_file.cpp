@@ -127,7 +127,12 @@ Domain read_mesh(const MeshSource& source, std::vector<std::int32_t>* piece_of_t
     case MeshFormat::vtu: {
         VtuRequest request;
         request.array = source.array;
-        return domain_from_arrays(read_vtu(source.path, request), source.field);
+        MeshArrays arrays = read_vtu(source.path, request);
+        // As a .pvtu piece of ghosts alone is refused: a surface would be empty.
+        if (arrays.tets.empty() && arrays.ghost_cells > 0)
+            throw Error(source.path.string() + ": no tetrahedra besides its " + std::to_string(arrays.ghost_cells) +
+                        " ghost cells");
+        return domain_from_arrays(std::move(arrays), source.field);
     }
     case MeshFormat::msh:
         return domain_from_arrays(read_msh(source.path, source.array), source.field);

@@ -78,5 +78,128 @@ rm "$work/split2/domain-1.tetiso" && ln -s /dev/zero "$work/split2/domain-1.teti
 expect 2 "a split file that is a link to /dev/zero" -- limited "$tetiso" run --split "$work/split2" --quiet -o "$out/t.ply"
 says "domain-1.tetiso: not a regular file"
 
+# Integer options: decimal digits only, the same rule for every option;
+# leading zeros do not make a number octal.
+"$tetiso" extract --lattice 032 --domains 010 -o "$work/oct.ply" --report "$work/oct.json" &&
+    "$tetiso" extract --lattice 32 -o "$work/dec.ply" && cmp -s "$work/oct.ply" "$work/dec.ply" &&
+    grep -q '"domains": 10,' "$work/oct.json" && passed=$((passed + 1)) ||
+    { echo "FAIL: --lattice 032 --domains 010 is not 32 and 10"; failures=$((failures + 1)); }
+for option in "--lattice 0x20" "--lattice 1e3" "--domains 0x10" "--threads 0x10" "--gpu 0x1" "--lattice 32 --seam-rings 0x2"; do
+    # shellcheck disable=SC2086 # the option and its value
+    expect 2 "integer option $option" -- "$tetiso" run $option -o "$out/s.ply"
+    says "is not a whole number in decimal digits"
+done
+
+# Messages: short, and naming what is wrong.
+expect 2 "--gpu -1" -- "$tetiso" extract --lattice 10 --gpu -1 -o "$out/s.ply"
+says "--gpu: must be at least 0, not -1"
+[ "$(wc -c <"$work/stderr")" -lt 100 ] && passed=$((passed + 1)) ||
+    { echo "FAIL: --gpu -1's message is long: $(wc -c <"$work/stderr") bytes"; failures=$((failures + 1)); }
+for phi in 0 nan -0.5 1.5; do
+    expect 2 "--phi $phi" -- "$tetiso" run --lattice 10 --domains 2 --quiet --phi "$phi" -o "$out/s.ply"
+    says "--phi: $phi is outside (0, 1]"
+done
+python3 -c "
+import sys; s = open(sys.argv[1]).read()
+open(sys.argv[2], 'w').write(s.replace('format=\"ascii\">\n0 49 56 57', 'format=\"ascii\">\n1099511627776 49 56 57', 1))" \
+    "$meshes/solver/cube-ascii.vtu" "$work/huge.vtu"
+expect 2 "a connectivity value past int32" -- "$tetiso" extract --mesh "$work/huge.vtu" --array distance -o "$out/t.ply"
+says "value 0 (1099511627776) is out of range"
+
+# ASCII numbers with a leading '+', as VTK, Gmsh and TetGen read them.
+python3 -c "
+import sys; s = open(sys.argv[1]).read()
+open(sys.argv[2], 'w').write(s.replace('4.330127239227295 3.9086', '+4.330127239227295 +3.9086', 1).replace('\n0 49 56 57', '\n+0 +49 56 57', 1))" \
+    "$meshes/solver/cube-ascii.vtu" "$work/plus.vtu"
+"$tetiso" extract --mesh "$meshes/solver/cube-ascii.vtu" --array distance --level 2 -o "$work/plain.ply" &&
+    "$tetiso" extract --mesh "$work/plus.vtu" --array distance --level 2 -o "$work/plus.ply" 2>"$work/stderr" &&
+    cmp -s "$work/plain.ply" "$work/plus.ply" && passed=$((passed + 1)) ||
+    { echo "FAIL: a .vtu with '+' values: $(cat "$work/stderr")"; failures=$((failures + 1)); }
+sed -e 's/^1 4.330127239227295$/1 +4.330127239227295/' -e 's/^2 0 0 0.8333333134651184$/2 +0 0 +0.8333333134651184/' \
+    "$meshes/solver/cube-2.2.msh" >"$work/plus.msh"
+"$tetiso" extract --mesh "$meshes/solver/cube-2.2.msh" --array distance --level 2 -o "$work/plain.ply" &&
+    "$tetiso" extract --mesh "$work/plus.msh" --array distance --level 2 -o "$work/plus.ply" 2>"$work/stderr" &&
+    cmp -s "$work/plain.ply" "$work/plus.ply" && ! cmp -s "$meshes/solver/cube-2.2.msh" "$work/plus.msh" &&
+    passed=$((passed + 1)) || { echo "FAIL: a .msh with '+' values: $(cat "$work/stderr")"; failures=$((failures + 1)); }
+for bad in "+-1" "++1" "+"; do
+    python3 -c "
+import sys; s = open(sys.argv[1]).read()
+open(sys.argv[2], 'w').write(s.replace('4.330127239227295 3.9086', sys.argv[3] + ' 3.9086', 1))" \
+        "$meshes/solver/cube-ascii.vtu" "$work/bad.vtu" "$bad"
+    expect 2 "a .vtu value '$bad'" -- "$tetiso" extract --mesh "$work/bad.vtu" --array distance -o "$out/t.ply"
+done
+
+# A cell of a lower-dimensional type that lists the corners of a
+# tetrahedron is a mistake, not a boundary marker to skip (it left a hole).
+for type in 1 3 5 9; do
+    python3 -c "
+import sys; s = open(sys.argv[1]).read()
+s = s.replace('format=\"ascii\">\n10 10 ', 'format=\"ascii\">\n10 ' + sys.argv[3] + ' ', 1)
+open(sys.argv[2], 'w').write(s)" "$meshes/solver/cube-ascii.vtu" "$work/type.vtu" "$type"
+    if [ "$type" = 9 ]; then # a quad has 4 corners: a boundary cell, skipped
+        expect 0 "a cell of type 9 with 4 corners" -- "$tetiso" extract --mesh "$work/type.vtu" --array distance --level 2 -o "$out/t.ply"
+    else
+        expect 2 "a cell of type $type with 4 corners" -- "$tetiso" extract --mesh "$work/type.vtu" --array distance -o "$out/t.ply"
+        says "cell 1 is a"
+        says "with 4 corners"
+    fi
+done
+
+# Options that mean nothing together, or nothing at all.
+expect 2 "--array with --field" -- "$tetiso" extract --mesh "$meshes/solver/cube-ascii.vtu" --array distance --field sphere -o "$out/t.ply"
+says "excludes --field"
+expect 2 "--attribute with --field" -- "$tetiso" run --mesh "$meshes/cube.1" --domains 2 --attribute 0 --field sphere -o "$out/t.ply"
+expect 2 "check --vertices-only without --against" -- "$tetiso" check "$work/keep.ply" --vertices-only
+says "requires --against"
+expect 2 "--node-ids ''" -- "$tetiso" extract --mesh "$meshes/solver/pieces.pvtu" --array distance --node-ids '' -o "$out/t.ply"
+says "an empty value names nothing"
+expect 2 "--array ''" -- "$tetiso" split --mesh "$meshes/solver/pieces.pvtu" --array '' -o "$out/s"
+expect 2 "--gpu 7 with --device cpu" -- "$tetiso" extract --lattice 10 --device cpu --gpu 7 -o "$out/s.ply"
+says "--gpu: applies with --device gpu"
+expect 2 "--gpu 1 with the CPU by default" -- "$tetiso" reduce "$work/keep.ply" --gpu 1 -o "$out/r.ply"
+python3 -c "
+import sys; s = open(sys.argv[1]).read()
+ghosts = '<CellData>\n<DataArray type=\"UInt8\" Name=\"vtkGhostType\" format=\"ascii\">\n' + ' '.join(['1'] * 1296) + '\n</DataArray>\n</CellData>\n'
+open(sys.argv[2], 'w').write(s.replace('</PointData>\n', '</PointData>\n' + ghosts, 1))" "$meshes/solver/cube-ascii.vtu" "$work/ghosts.vtu"
+expect 2 "a .vtu of ghost cells alone" -- "$tetiso" extract --mesh "$work/ghosts.vtu" --array distance -o "$out/t.ply"
+says "no tetrahedra besides its 1296 ghost cells"
+# Two $NodeData of one name and one time step: which is the field?
+python3 -c "
+import sys; s = open(sys.argv[1]).read()
+a = s.index('\$NodeData'); b = s.index('\$EndNodeData') + len('\$EndNodeData\n')
+open(sys.argv[2], 'w').write(s[:b] + s[a:b] + s[b:])" "$meshes/solver/cube-2.2.msh" "$work/twice.msh"
+expect 2 "a .msh view twice" -- "$tetiso" extract --mesh "$work/twice.msh" --array distance -o "$out/t.ply"
+says "appears twice for time step 0"
+
+# A signal while the outputs are written (Ctrl-C, SIGTERM, SIGHUP): the
+# temporaries are removed and the process ends by that signal. The signal is
+# sent the moment a temporary appears.
+for signal in INT TERM HUP; do
+    rm -rf "$work/sig" && mkdir "$work/sig"
+    python3 - "$signal" "$work/sig" "$tetiso" <<'PY'
+import os, signal, subprocess, sys
+name, folder, tetiso = sys.argv[1:]
+number = getattr(signal, "SIG" + name)
+# A loaded machine may let the write pass unseen: a few tries.
+for attempt in range(5):
+    job = subprocess.Popen([tetiso, "extract", "--lattice", "80", "-o", folder + "/s.ply", "--report", folder + "/r.json"],
+                           stderr=subprocess.DEVNULL)
+    while job.poll() is None and not any(".tmp." in f for f in os.listdir(folder)):
+        pass
+    if job.poll() is None:
+        break
+    for f in os.listdir(folder):
+        os.remove(os.path.join(folder, f))
+else:
+    sys.exit("no temporary seen in 5 runs")
+job.send_signal(number)
+status = job.wait()
+left = os.listdir(folder)
+if status != -number or left:
+    sys.exit(f"SIG{name}: status {status}, left {left}")
+PY
+    if [ $? -eq 0 ]; then passed=$((passed + 1)); else echo "FAIL: SIG$signal during a write"; failures=$((failures + 1)); fi
+done
+
 echo "$passed passed, $failures failed"
 [ "$failures" -eq 0 ]
