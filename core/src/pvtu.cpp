@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <numeric>
@@ -136,6 +137,35 @@ void for_each_boundary_face(const std::vector<std::int32_t>& tets, std::size_t n
             i = j;
         }
     }
+}
+
+// How far the copies of one shared node may lie apart, as a fraction of the
+// mesh's mean edge length; and how many units of float rounding (of the
+// larger magnitude) any two copies of a coordinate or a value may differ by.
+constexpr double kPositionTolerance = 1e-4;
+constexpr double kValueUlps = 4;
+
+// Whether a and b agree: within `absolute`, or within kValueUlps of float
+// rounding of the larger.
+bool within(float a, float b, double absolute) {
+    const double difference = std::abs(static_cast<double>(a) - static_cast<double>(b));
+    const double scale = std::max(std::abs(static_cast<double>(a)), std::abs(static_cast<double>(b)));
+    return difference <= absolute || difference <= kValueUlps * std::numeric_limits<float>::epsilon() * scale;
+}
+
+// A float's bits as an integer that sorts as the float does, -0 before +0: a
+// total order, so that the smallest copy of a node is one whatever its pieces' order.
+std::uint32_t ordered(float value) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &value, sizeof bits);
+    return bits & 0x80000000u ? ~bits : bits | 0x80000000u;
+}
+
+// Enough digits to tell any two different doubles apart.
+std::string full_precision(double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.17g", value);
+    return text;
 }
 
 // A node on a piece's boundary, as the scan records it.
@@ -310,24 +340,47 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
     std::sort(boundary_edges.begin(), boundary_edges.end());
     spacing_ = edge_sum / static_cast<double>(6 * tet_count_);
 
-    // Shared nodes: the first piece's position; values that must agree.
+    // Shared nodes: each takes the smallest of the positions and values its
+    // pieces give (the pieces' order does not matter), and every other must
+    // lie within the tolerance of it: a position within kPositionTolerance
+    // of the mean edge length, a value within kValueUlps of float rounding
+    // of the larger magnitude (the same rule for both, at least a few ulps
+    // of float, which solvers' ranks may disagree by).
     std::sort(boundary_nodes.begin(), boundary_nodes.end());
     node_count_ = used_nodes;
+    const auto describe = [&](const BoundaryNode& n) {
+        return "(" + full_precision(n.x) + ", " + full_precision(n.y) + ", " + full_precision(n.z) + ")";
+    };
     for (std::size_t i = 0; i < boundary_nodes.size();) {
         std::size_t j = i + 1;
         while (j < boundary_nodes.size() && boundary_nodes[j].id == boundary_nodes[i].id) ++j;
         if (j - i > 1) {
-            const BoundaryNode& first = boundary_nodes[i];
+            const auto smallest = [](const BoundaryNode& a, const BoundaryNode& b) {
+                return std::make_tuple(ordered(a.x), ordered(a.y), ordered(a.z), ordered(a.f)) <
+                       std::make_tuple(ordered(b.x), ordered(b.y), ordered(b.z), ordered(b.f));
+            };
+            const BoundaryNode& chosen = *std::min_element(boundary_nodes.begin() + static_cast<std::ptrdiff_t>(i),
+                                                           boundary_nodes.begin() + static_cast<std::ptrdiff_t>(j), smallest);
+            const std::string& chosen_piece = pieces_[static_cast<std::size_t>(chosen.piece)].string();
             node_count_ -= static_cast<std::int64_t>(j - i - 1);
-            for (std::size_t k = i + 1; k < j && !source.array.empty(); ++k)
-                if (boundary_nodes[k].f != first.f)
-                    throw Error(pieces_[static_cast<std::size_t>(boundary_nodes[k].piece)].string() + ": node id " +
-                                std::to_string(first.id) + " has value " + std::to_string(boundary_nodes[k].f) +
-                                " of '" + source.array + "', where " +
-                                pieces_[static_cast<std::size_t>(first.piece)].string() + " gives it " +
-                                std::to_string(first.f));
-            shared_nodes_.push_back(first.id);
-            shared_xyz_.insert(shared_xyz_.end(), {first.x, first.y, first.z});
+            for (std::size_t k = i; k < j; ++k) {
+                const BoundaryNode& other = boundary_nodes[k];
+                const std::string& other_piece = pieces_[static_cast<std::size_t>(other.piece)].string();
+                if (!within(other.x, chosen.x, kPositionTolerance * spacing_) ||
+                    !within(other.y, chosen.y, kPositionTolerance * spacing_) ||
+                    !within(other.z, chosen.z, kPositionTolerance * spacing_))
+                    throw Error(other_piece + ": node id " + std::to_string(chosen.id) + " is at " + describe(other) +
+                                ", where " + chosen_piece + " puts it at " + describe(chosen) +
+                                ": farther apart than " + full_precision(kPositionTolerance) +
+                                " of the mean edge length " + full_precision(spacing_));
+                if (!source.array.empty() && !within(other.f, chosen.f, 0))
+                    throw Error(other_piece + ": node id " + std::to_string(chosen.id) + " has value " +
+                                full_precision(other.f) + " of '" + source.array + "', where " + chosen_piece +
+                                " gives it " + full_precision(chosen.f) + ": more than float rounding apart");
+            }
+            shared_nodes_.push_back(chosen.id);
+            shared_xyz_.insert(shared_xyz_.end(), {chosen.x, chosen.y, chosen.z});
+            shared_f_.push_back(chosen.f);
         }
         i = j;
     }
@@ -417,7 +470,13 @@ Domain PvtuPartition::make_domain(int domain) const {
     out.z.assign(pz.begin(), pz.end());
     out.f.resize(n);
     if (!source_.array.empty()) {
-        for (std::size_t i = 0; i < n; ++i) out.f[i] = static_cast<float>(a.f[static_cast<std::size_t>(piece.used[i])]);
+        for (std::size_t i = 0; i < n; ++i) {
+            out.f[i] = static_cast<float>(a.f[static_cast<std::size_t>(piece.used[i])]);
+            // A shared node's value as every piece takes it (see the scan).
+            const auto shared = std::lower_bound(shared_nodes_.begin(), shared_nodes_.end(), out.gid[i]);
+            if (shared != shared_nodes_.end() && *shared == out.gid[i])
+                out.f[i] = shared_f_[static_cast<std::size_t>(shared - shared_nodes_.begin())];
+        }
     } else {
         // At the positions every piece agrees on, so shared nodes get one value.
         source_.field->evaluate(px.data(), py.data(), pz.data(), n, out.f.data());
