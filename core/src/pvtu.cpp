@@ -483,10 +483,7 @@ Domain PvtuPartition::make_domain(int domain) const {
     }
     out.tets.resize(a.tets.size());
     for (std::size_t i = 0; i < a.tets.size(); ++i) out.tets[i] = local[static_cast<std::size_t>(a.tets[i])];
-    for (std::size_t t = 0; t < out.tet_count(); ++t) {
-        std::int32_t* v = out.tets.data() + 4 * t;
-        if (negatively_oriented(out, v[0], v[1], v[2], v[3])) std::swap(v[2], v[3]);
-    }
+    orient_tetrahedra(out, path.string());
     out.interface.assign(n, 0);
     for (std::size_t e = 0; e < shared_keys_.size(); ++e) {
         const auto first = shared_domains_.begin() + shared_first_[e], last = shared_domains_.begin() + shared_first_[e + 1];

@@ -145,6 +145,21 @@ open(sys.argv[2], 'w').write(s)" "$meshes/solver/cube-ascii.vtu" "$work/type.vtu
     fi
 done
 
+# A tetrahedron of zero volume (its corners on one line) has no orientation:
+# refused, named. One listed with its corners in the other order is read as
+# the positive tetrahedron it is (each is oriented by its own corners).
+python3 -c "
+import sys; s = open(sys.argv[1]).read()
+open(sys.argv[2], 'w').write(s.replace('format=\"ascii\">\n0 49 56 57', 'format=\"ascii\">\n0 1 2 3', 1))
+open(sys.argv[3], 'w').write(s.replace('format=\"ascii\">\n0 49 56 57', 'format=\"ascii\">\n0 49 57 56', 1))" \
+    "$meshes/solver/cube-ascii.vtu" "$work/flat.vtu" "$work/flipped.vtu"
+expect 2 "a tetrahedron of zero volume" -- "$tetiso" extract --mesh "$work/flat.vtu" --array distance -o "$out/t.ply"
+says "flat.vtu: tetrahedron 0 has zero volume"
+"$tetiso" extract --mesh "$work/flipped.vtu" --array distance --level 2 -o "$work/flipped.ply" &&
+    "$tetiso" extract --mesh "$meshes/solver/cube-ascii.vtu" --array distance --level 2 -o "$work/unflipped.ply" &&
+    cmp -s "$work/flipped.ply" "$work/unflipped.ply" && passed=$((passed + 1)) ||
+    { echo "FAIL: a tetrahedron in the other corner order"; failures=$((failures + 1)); }
+
 # Options that mean nothing together, or nothing at all.
 expect 2 "--array with --field" -- "$tetiso" extract --mesh "$meshes/solver/cube-ascii.vtu" --array distance --field sphere -o "$out/t.ply"
 says "excludes --field"
