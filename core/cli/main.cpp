@@ -8,6 +8,8 @@
 #include <string>
 #include <thread>
 
+#include <unistd.h>
+
 #include "commands.hpp"
 #include "tetiso/detail/write_atomically.hpp"
 #include "tetiso/error.hpp"
@@ -57,9 +59,25 @@ std::string one_line(const std::string& message) {
     }
     return out;
 }
+// libgomp's threads wait for work by spinning before they sleep (its default
+// wait policy); on a machine whose cores other processes also use, a
+// spinning thread holds a core the thread it waits for needs, and a job with
+// --threads equal to the core count slows by several times. Waiting
+// passively costs a little on an idle machine and bounds the loss on a
+// shared one. libgomp reads OMP_WAIT_POLICY when it is loaded, before
+// main(): the process sets it and executes itself again, once, where the
+// user set neither it nor GOMP_SPINCOUNT (then their choice stands). If the
+// exec fails, the process goes on as it is.
+void wait_passively_by_default(char** argv) {
+    if (std::getenv("OMP_WAIT_POLICY") || std::getenv("GOMP_SPINCOUNT")) return;
+    if (::setenv("OMP_WAIT_POLICY", "passive", 1) != 0) return;
+    ::execv("/proc/self/exe", argv);
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
+    wait_passively_by_default(argv);
     // A file-size limit (ulimit -f) then fails the write with EFBIG, which
     // the writer reports and cleans up after, instead of killing the process
     // with SIGXFSZ and leaving its temporary file behind.

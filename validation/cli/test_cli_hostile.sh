@@ -216,5 +216,33 @@ PY
     if [ $? -eq 0 ]; then passed=$((passed + 1)); else echo "FAIL: SIG$signal during a write"; failures=$((failures + 1)); fi
 done
 
+# libgomp's threads wait passively unless the user chose otherwise: the
+# process runs with OMP_WAIT_POLICY=passive (set before libgomp is loaded,
+# by executing itself again), and a policy the user set stands.
+python3 - "$tetiso" "$work" <<'PY'
+import os, subprocess, sys, time
+tetiso, work = sys.argv[1:]
+for given, expected in ((None, b"passive"), (b"active", b"active")):
+    env = {k: v for k, v in os.environ.items() if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
+    if given:
+        env["OMP_WAIT_POLICY"] = given.decode()
+    job = subprocess.Popen([tetiso, "extract", "--lattice", "120", "-o", work + "/wait.ply"], env=env)
+    seen = None
+    deadline = time.time() + 60
+    while job.poll() is None and time.time() < deadline:
+        try:
+            variables = open(f"/proc/{job.pid}/environ", "rb").read().split(b"\0")
+        except OSError:
+            break
+        values = [v.split(b"=", 1)[1] for v in variables if v.startswith(b"OMP_WAIT_POLICY=")]
+        if values:
+            seen = values[0]
+            break
+    job.wait()
+    if seen != expected:
+        sys.exit(f"OMP_WAIT_POLICY given {given}: the process ran with {seen}, not {expected}")
+PY
+if [ $? -eq 0 ]; then passed=$((passed + 1)); else echo "FAIL: the wait policy"; failures=$((failures + 1)); fi
+
 echo "$passed passed, $failures failed"
 [ "$failures" -eq 0 ]
