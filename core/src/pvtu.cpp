@@ -92,8 +92,8 @@ LoadedPiece load_piece(std::string_view bytes, const std::filesystem::path& path
     return piece;
 }
 
-// Calls found(u, v, w) for every face of `tets` that only one tetrahedron
-// has. Faces are bucketed by their smallest corner (a counting sort) and
+// Calls found(u, v, w, t) for every face of `tets` that only one
+// tetrahedron, t, has. Faces are bucketed by their smallest corner (a counting sort) and
 // each bucket, a dozen faces or so, sorted on its own: for 23 M faces this
 // is several times faster than sorting them all.
 template <class Found>
@@ -115,25 +115,33 @@ void for_each_boundary_face(const std::vector<std::int32_t>& tets, std::size_t n
             ++first[static_cast<std::size_t>(f[0]) + 1];
         }
     for (std::size_t v = 0; v < nodes; ++v) first[v + 1] += first[v];
-    std::vector<std::uint64_t> rest(4 * count); // (middle, largest) corner of each face
+    struct Rest {
+        std::uint64_t corners; // (middle, largest) corner of the face
+        std::uint32_t tet;     // the tetrahedron it is a face of
+    };
+    std::vector<Rest> rest(4 * count);
     {
         std::vector<std::int64_t> fill(first.begin(), first.end() - 1);
         for (std::size_t t = 0; t < count; ++t)
             for (int skip = 0; skip < 4; ++skip) {
                 std::int32_t f[3];
                 face(t, skip, f);
-                rest[static_cast<std::size_t>(fill[static_cast<std::size_t>(f[0])]++)] =
-                    static_cast<std::uint64_t>(f[1]) << 32 | static_cast<std::uint32_t>(f[2]);
+                rest[static_cast<std::size_t>(fill[static_cast<std::size_t>(f[0])]++)] = {
+                    static_cast<std::uint64_t>(f[1]) << 32 | static_cast<std::uint32_t>(f[2]), static_cast<std::uint32_t>(t)};
             }
     }
+    // Only the order of different faces matters: a face found twice is
+    // interior and skipped, whichever tetrahedron comes first.
+    const auto by_corners = [](const Rest& a, const Rest& b) { return a.corners < b.corners; };
     for (std::size_t v = 0; v < nodes; ++v) {
         const auto begin = rest.begin() + first[v], end = rest.begin() + first[v + 1];
-        std::sort(begin, end);
+        std::sort(begin, end, by_corners);
         for (auto i = begin; i != end;) {
             auto j = i + 1;
-            while (j != end && *j == *i) ++j;
+            while (j != end && j->corners == i->corners) ++j;
             if (j - i == 1)
-                found(static_cast<std::int32_t>(v), static_cast<std::int32_t>(*i >> 32), static_cast<std::int32_t>(*i & 0xffffffffu));
+                found(static_cast<std::int32_t>(v), static_cast<std::int32_t>(i->corners >> 32),
+                      static_cast<std::int32_t>(i->corners & 0xffffffffu), static_cast<std::size_t>(i->tet));
             i = j;
         }
     }
@@ -168,6 +176,9 @@ std::string full_precision(double value) {
     return text;
 }
 
+// A tetrahedron by its four global node ids, sorted.
+using TetIds = std::array<GlobalId, 4>;
+
 // A node on a piece's boundary, as the scan records it.
 struct BoundaryNode {
     GlobalId id;
@@ -188,6 +199,9 @@ struct PieceScan {
     std::uint64_t digest = 0;
     std::vector<BoundaryNode> nodes;
     std::vector<std::pair<EdgeKey, int>> edges;
+    // The tetrahedra with a face on the boundary, each as its sorted node
+    // ids: two pieces that hold one tetrahedron overlap (see the check).
+    std::vector<TetIds> boundary_tets;
     std::string error;
 };
 
@@ -215,7 +229,11 @@ PieceScan scan_piece(const std::filesystem::path& path, const MeshSource& source
                     scan.edge_sum += std::sqrt(dx * dx + dy * dy + dz * dz);
                 }
         std::vector<std::int32_t> on_boundary;
-        for_each_boundary_face(a.tets, a.x.size(), [&](std::int32_t u, std::int32_t v, std::int32_t w) {
+        for_each_boundary_face(a.tets, a.x.size(), [&](std::int32_t u, std::int32_t v, std::int32_t w, std::size_t t) {
+            TetIds tet;
+            for (int k = 0; k < 4; ++k) tet[static_cast<std::size_t>(k)] = a.ids[static_cast<std::size_t>(a.tets[4 * t + static_cast<std::size_t>(k)])];
+            std::sort(tet.begin(), tet.end());
+            scan.boundary_tets.push_back(tet);
             const std::int32_t f[3] = {u, v, w};
             for (int e = 0; e < 3; ++e) {
                 const GlobalId g = a.ids[static_cast<std::size_t>(f[e])];
@@ -226,6 +244,8 @@ PieceScan scan_piece(const std::filesystem::path& path, const MeshSource& source
         });
         std::sort(scan.edges.begin(), scan.edges.end());
         scan.edges.erase(std::unique(scan.edges.begin(), scan.edges.end()), scan.edges.end());
+        std::sort(scan.boundary_tets.begin(), scan.boundary_tets.end());
+        scan.boundary_tets.erase(std::unique(scan.boundary_tets.begin(), scan.boundary_tets.end()), scan.boundary_tets.end());
         std::sort(on_boundary.begin(), on_boundary.end());
         on_boundary.erase(std::unique(on_boundary.begin(), on_boundary.end()), on_boundary.end());
         for (const std::int32_t v : on_boundary) {
@@ -261,6 +281,7 @@ std::string pack(const std::string& error, const std::vector<std::pair<int, Piec
         std::vector<EdgeKey> keys; // the piece of each is p
         for (const auto& edge : scan.edges) keys.push_back(edge.first);
         out.put_array(keys);
+        out.put_array(scan.boundary_tets);
     }
     return std::move(out.bytes);
 }
@@ -312,6 +333,7 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
                 scan.error.assign(piece_error.begin(), piece_error.end());
                 scan.nodes = in.get_array<BoundaryNode>();
                 for (const EdgeKey key : in.get_array<EdgeKey>()) scan.edges.push_back({key, static_cast<int>(p)});
+                scan.boundary_tets = in.get_array<TetIds>();
             }
         }
         if (!first_error.empty()) throw Error(first_error);
@@ -320,6 +342,27 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
             if (!scan.error.empty()) throw Error(scan.error);
     }
     const int parts = static_cast<int>(pieces_.size());
+
+    // Pieces that overlap (one listed twice, under two names, or holding the
+    // whole mesh each, as VTK writes an unstreamed grid in several pieces;
+    // cells shared but not marked as ghosts) hold a tetrahedron of the one's
+    // boundary in the other too; where that one is on both boundaries it is
+    // found here, before any task. Those on one boundary only are not.
+    {
+        std::vector<std::pair<TetIds, int>> held;
+        for (int p = 0; p < static_cast<int>(scans.size()); ++p)
+            for (const TetIds& tet : scans[static_cast<std::size_t>(p)].boundary_tets) held.push_back({tet, p});
+        std::sort(held.begin(), held.end());
+        for (std::size_t i = 1; i < held.size(); ++i)
+            if (held[i].first == held[i - 1].first) {
+                const TetIds& t = held[i].first;
+                throw Error(pieces_[static_cast<std::size_t>(held[i].second)].string() +
+                            ": the tetrahedron of node ids " + std::to_string(t[0]) + ", " + std::to_string(t[1]) +
+                            ", " + std::to_string(t[2]) + ", " + std::to_string(t[3]) + " is also in " +
+                            pieces_[static_cast<std::size_t>(held[i - 1].second)].string() +
+                            ": pieces overlap (a cell two pieces hold must be a ghost, vtkGhostType, in all but one)");
+            }
+    }
 
     std::vector<std::int64_t> part_tets(pieces_.size());
     std::vector<std::pair<EdgeKey, int>> boundary_edges;

@@ -160,6 +160,23 @@ says "flat.vtu: tetrahedron 0 has zero volume"
     cmp -s "$work/flipped.ply" "$work/unflipped.ply" && passed=$((passed + 1)) ||
     { echo "FAIL: a tetrahedron in the other corner order"; failures=$((failures + 1)); }
 
+# .pvtu pieces that overlap: one listed twice, one under two names, and
+# pieces that each hold the whole mesh (as VTK's writer gives for a grid it
+# does not stream). Refused before any task, naming a tetrahedron and both
+# pieces.
+sed 's|Source="pieces_2.vtu"|Source="pieces_1.vtu"|' "$meshes/solver/pieces.pvtu" >"$work/twice.pvtu"
+sed 's|Source="pieces_2.vtu"|Source="./pieces_1.vtu"|' "$meshes/solver/pieces.pvtu" >"$work/two-names.pvtu"
+sed -e 's|Source="pieces_1.vtu"|Source="pieces_0.vtu"|' -e 's|Source="pieces_2.vtu"|Source="pieces_0.vtu"|' \
+    "$meshes/solver/pieces.pvtu" >"$work/whole.pvtu"
+for pvtu in twice two-names whole; do
+    for command in "extract" "run --quiet" "split"; do
+        # shellcheck disable=SC2086
+        expect 2 "$command over overlapping pieces ($pvtu)" -- "$tetiso" $command --mesh "$work/$pvtu.pvtu" --array distance -o "$out/t.ply"
+        says "pieces overlap"
+    done
+done
+says "pieces_0.vtu: the tetrahedron of node ids"
+
 # Options that mean nothing together, or nothing at all.
 expect 2 "--array with --field" -- "$tetiso" extract --mesh "$meshes/solver/cube-ascii.vtu" --array distance --field sphere -o "$out/t.ply"
 says "excludes --field"

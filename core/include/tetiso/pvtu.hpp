@@ -11,7 +11,10 @@
 // the merge tree (heavy-edge matching, as MeshPartition builds it) and the
 // checks between pieces, in memory of the order of the pieces' surfaces. A
 // task then reads its piece again, alone. Ghost cells (vtkGhostType) are
-// skipped, so pieces do not overlap.
+// skipped, so pieces do not overlap; pieces that still do (one listed twice
+// or under two names, each holding the whole mesh, cells shared but not
+// marked as ghosts) are refused by the scan where a tetrahedron lies on the
+// boundary of both, naming it and the two pieces.
 //
 // Solvers write a shared node from every rank that holds it, and its
 // coordinates and values need not carry the same bits in each: a shared node
