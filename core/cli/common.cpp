@@ -44,21 +44,19 @@ std::string as_decimal_integer(std::string& text) {
     return {};
 }
 
-void integers_in_decimal(CLI::App& app) {
-    for (CLI::Option* option : app.get_options()) {
-        const std::string type = option->get_type_name();
-        if (type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0)
-            option->transform(CLI::Validator(as_decimal_integer, "", "decimal"));
-    }
-    for (CLI::App* command : app.get_subcommands({})) integers_in_decimal(*command);
-}
-
 // A file name or array name given empty: CLI11 takes '' as a value.
 std::string not_empty(std::string& text) { return text.empty() ? "an empty value names nothing" : std::string{}; }
 
 } // namespace
 
-void require_decimal_integers(CLI::App& app) { integers_in_decimal(app); }
+void require_decimal_integers(CLI::App& app) {
+    for (CLI::Option* option : app.get_options()) {
+        const std::string type = option->get_type_name();
+        if (type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0)
+            option->transform(CLI::Validator(as_decimal_integer, "", "decimal")); // first, before the other checks
+    }
+    for (CLI::App* command : app.get_subcommands({})) require_decimal_integers(*command);
+}
 
 void refuse_meaningless_combinations(CLI::App& app) {
     for (CLI::App* cmd : app.get_subcommands({})) {
