@@ -6,6 +6,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -32,6 +33,20 @@ void add_phi_option(CLI::App& cmd, double& phi);
 // "non-negative" test, and CLI11's own messages print ranges of 300 digits).
 // A count of domains: a whole number, at least 1.
 const CLI::Validator& domain_count_check();
+// An index (--gpu, --attribute): a whole number, at least 0.
+const CLI::Validator& index_check();
+// --phi: a number in (0, 1] (0 and NaN are not).
+const CLI::Validator& phi_check();
+// Makes every integer option of `app` and its subcommands read decimal
+// digits only (an optional sign, leading zeros ignored: "032" is 32, "0x20"
+// is refused), before any other check of the option. For main(), once every
+// option is added.
+void require_decimal_integers(CLI::App& app);
+// Refuses, in every subcommand of `app`, options that mean nothing together
+// or given empty: --array with --field or --attribute, --attribute with
+// --field, --vertices-only without --against, '' as a file or array name.
+// For main(), once every option is added.
+void refuse_meaningless_combinations(CLI::App& app);
 // A distance bound: a finite number, at least 0.
 const CLI::Validator& error_bound_check();
 // --threads: 0 (all cores) to kMaxThreads.
@@ -68,6 +83,24 @@ nlohmann::json reduce_json(const ReduceReport& report);
 // (that of the file a link there names) must exist and be writable, and it
 // must not be a directory, a device, a pipe or a socket.
 void require_writable(const std::filesystem::path& path);
+
+// A file named on the command line, by the option that names it ("-o",
+// "--report", "--mesh", "input"), for require_distinct_files.
+struct NamedFile {
+    std::string option;
+    std::filesystem::path path;
+};
+// Fails early, before any work, when two of a command's outputs are one file
+// or an output is one of its inputs, which the output would replace: the
+// same device and inode, or the same path once resolved (detail::same_file),
+// so "./x", links and hard links count. An output that is a link stands for
+// the file it names (the one written).
+void require_distinct_files(const std::vector<NamedFile>& outputs, const std::vector<NamedFile>& inputs);
+// The files `--mesh PATH` reads: PATH; a .pvtu's pieces too; TetGen's
+// BASE.node and BASE.ele.
+std::vector<NamedFile> mesh_files(const std::filesystem::path& mesh);
+// The files of a split directory (`run --split DIR`).
+std::vector<NamedFile> split_files(const std::filesystem::path& dir);
 
 // Writes a JSON report as one of the command's outputs, which are renamed
 // into place together by output.commit() (never a half-written file, nor a

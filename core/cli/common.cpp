@@ -14,6 +14,8 @@
 #include "commands.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/io.hpp"
+#include "tetiso/mesh_file.hpp"
+#include "tetiso/pvtu.hpp"
 
 namespace tetiso::cli {
 
@@ -28,7 +30,81 @@ std::optional<double> number(const std::string& text) {
     return value;
 }
 
+// Every integer option, as CLI11 would convert it: "032" as octal, "0x20"
+// as hex, "1e3" not at all. Rewritten to plain decimal digits first, so
+// that every option reads a number the same way and as a person does.
+std::string as_decimal_integer(std::string& text) {
+    std::size_t digits = 0;
+    const bool negative = !text.empty() && text.front() == '-';
+    if (!text.empty() && (text.front() == '-' || text.front() == '+')) digits = 1;
+    if (digits == text.size() || text.find_first_not_of("0123456789", digits) != std::string::npos)
+        return "'" + text + "' is not a whole number in decimal digits";
+    const std::size_t first = std::min(text.find_first_not_of('0', digits), text.size() - 1);
+    text = (negative && text.substr(first) != "0" ? "-" : "") + text.substr(first);
+    return {};
+}
+
+// A file name or array name given empty: CLI11 takes '' as a value.
+std::string not_empty(std::string& text) { return text.empty() ? "an empty value names nothing" : std::string{}; }
+
 } // namespace
+
+void require_decimal_integers(CLI::App& app) {
+    for (CLI::Option* option : app.get_options()) {
+        const std::string type = option->get_type_name();
+        if (type.rfind("INT", 0) == 0 || type.rfind("UINT", 0) == 0)
+            option->transform(CLI::Validator(as_decimal_integer, "", "decimal")); // first, before the other checks
+    }
+    for (CLI::App* command : app.get_subcommands({})) require_decimal_integers(*command);
+}
+
+void refuse_meaningless_combinations(CLI::App& app) {
+    for (CLI::App* cmd : app.get_subcommands({})) {
+        const auto option = [cmd](const char* name) -> CLI::Option* {
+            for (CLI::Option* o : cmd->get_options())
+                if (o->check_name(name)) return o;
+            return nullptr;
+        };
+        // A field comes from one place: the file's array, a TetGen
+        // attribute, or an analytic --field.
+        CLI::Option* field = option("--field");
+        CLI::Option* array = option("--array");
+        CLI::Option* attribute = option("--attribute");
+        if (field && array) array->excludes(field);
+        if (field && attribute) attribute->excludes(field);
+        if (array && attribute) array->excludes(attribute);
+        for (const char* name : {"--array", "--node-ids", "--mesh", "--partition", "--split", "--against", "--report",
+                                 "-o"})
+            if (CLI::Option* o = option(name)) o->check(CLI::Validator(not_empty, "", "not empty"));
+        if (CLI::Option* vertices_only = option("--vertices-only"))
+            if (CLI::Option* against = option("--against")) vertices_only->needs(against);
+    }
+}
+
+const CLI::Validator& index_check() {
+    static const CLI::Validator check(
+        [](std::string& text) -> std::string {
+            const std::optional<double> value = number(text);
+            if (!value || *value != std::floor(*value)) return "'" + text + "' is not a whole number";
+            if (*value < 0) return "must be at least 0, not " + text;
+            if (*value > std::numeric_limits<int>::max()) return text + " is too large";
+            return {};
+        },
+        "INT >= 0", "index");
+    return check;
+}
+
+const CLI::Validator& phi_check() {
+    static const CLI::Validator check(
+        [](std::string& text) -> std::string {
+            const std::optional<double> value = number(text);
+            if (!value) return "'" + text + "' is not a number";
+            if (!(*value > 0 && *value <= 1)) return text + " is outside (0, 1]";
+            return {};
+        },
+        "in (0, 1]", "phi");
+    return check;
+}
 
 const CLI::Validator& domain_count_check() {
     static const CLI::Validator check(
@@ -96,6 +172,55 @@ void require_writable(const std::filesystem::path& path) {
     if (std::filesystem::is_directory(path, ec)) throw Error(path.string() + ": cannot write: it is a directory");
 }
 
+void require_distinct_files(const std::vector<NamedFile>& outputs, const std::vector<NamedFile>& inputs) {
+    const auto describe = [](const NamedFile& file) { return file.path.string() + " (" + file.option + ")"; };
+    for (std::size_t i = 0; i < outputs.size(); ++i) {
+        if (outputs[i].path.empty()) continue; // an output not asked for
+        const std::filesystem::path target = detail::output_target(outputs[i].path);
+        for (std::size_t j = 0; j < i; ++j)
+            if (!outputs[j].path.empty() && detail::same_file(detail::output_target(outputs[j].path), target))
+                throw Error(describe(outputs[i]) + ": cannot write: it is the same file as the output " +
+                            describe(outputs[j]) + "; give each output a path of its own");
+        for (const NamedFile& input : inputs)
+            if (detail::same_file(input.path, target))
+                throw Error(describe(outputs[i]) + ": cannot write: it is the same file as the input " +
+                            describe(input) + ", which it would replace");
+    }
+}
+
+std::vector<NamedFile> mesh_files(const std::filesystem::path& mesh) {
+    std::vector<NamedFile> files;
+    switch (mesh_format(mesh)) {
+    case MeshFormat::tetgen: {
+        const std::string extension = mesh.extension().string();
+        const std::filesystem::path base =
+            extension == ".node" || extension == ".ele" ? mesh.parent_path() / mesh.stem() : mesh;
+        files.push_back({"--mesh", base.string() + ".node"});
+        files.push_back({"--mesh", base.string() + ".ele"});
+        break;
+    }
+    case MeshFormat::pvtu:
+        files.push_back({"--mesh", mesh});
+        for (const std::filesystem::path& piece : read_pvtu_index(mesh).pieces)
+            files.push_back({"a piece of --mesh", piece});
+        break;
+    default: files.push_back({"--mesh", mesh});
+    }
+    return files;
+}
+
+std::vector<NamedFile> split_files(const std::filesystem::path& dir) {
+    std::vector<NamedFile> files;
+    std::error_code ec;
+    std::filesystem::directory_iterator entries(dir, ec);
+    if (ec) return files; // the split's reader says what is wrong with it
+    for (; entries != std::filesystem::directory_iterator(); entries.increment(ec)) {
+        if (ec) break;
+        files.push_back({"a file of --split", entries->path()});
+    }
+    return files;
+}
+
 void write_report(const nlohmann::json& report, const std::filesystem::path& path, OutputFiles& output) {
     output.add(path, [&](const std::filesystem::path& temporary) {
         std::ofstream file(temporary, std::ios::trunc);
@@ -116,9 +241,16 @@ void add_device_options(CLI::App& cmd, DeviceChoice& choice, const std::string& 
                "predicts it ends first: the CPU or any of the node's GPUs; the CPU alone where there is no GPU); "
                "the same bytes every way";
     }
-    cmd.add_option("--device", choice.device, help)->check(CLI::IsMember(devices))->capture_default_str();
+    CLI::Option* device = cmd.add_option("--device", choice.device, help)->check(CLI::IsMember(devices))->capture_default_str();
     cmd.add_option("--gpu", choice.gpu, "With --device gpu: which CUDA device (0-based, after CUDA_VISIBLE_DEVICES)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(index_check())
+        // It picks among GPUs: with the CPU alone it would be ignored.
+        ->check(CLI::Validator(
+            [device](std::string&) -> std::string {
+                const std::string where = device->count() ? device->results().back() : device->get_default_str();
+                return where == "cpu" ? "applies with --device gpu; the work runs on the CPU" : std::string{};
+            },
+            "", "not with cpu"))
         ->capture_default_str();
 }
 

@@ -106,6 +106,8 @@ void run_extract(const ExtractArguments& args) {
         throw Error("--mesh reads one domain; --domains applies to the lattice only");
     if ((args.attribute || !args.array.empty() || !args.node_ids.empty()) && args.mesh.empty())
         throw Error("--attribute, --array and --node-ids need --mesh");
+    require_distinct_files({{"-o", args.output}, {"--report", args.report}},
+                           args.mesh.empty() ? std::vector<NamedFile>{} : mesh_files(args.mesh));
     std::unique_ptr<Field> made_field = make_field(args.field);
     if (!args.mesh.empty()) return run_extract_mesh(args, *made_field, start);
     const LatticePartition partition(args.lattice, args.domains, std::move(made_field));
@@ -214,7 +216,7 @@ void add_extract_command(CLI::App& app, Command& run) {
     cmd->add_option_function<int>(
         "--attribute", [args](int k) { args->attribute = k; },
         "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
-        ->check(CLI::NonNegativeNumber);
+        ->check(index_check());
     cmd->add_option("--domains", args->domains, "Number of domains (recursive coordinate bisection)")
         ->check(domain_count_check());
     cmd->add_option("--field", args->field,

@@ -8,7 +8,10 @@
 #include <string>
 #include <thread>
 
+#include <unistd.h>
+
 #include "commands.hpp"
+#include "tetiso/detail/write_atomically.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/schedule.hpp"
 
@@ -56,13 +59,32 @@ std::string one_line(const std::string& message) {
     }
     return out;
 }
+// libgomp's threads wait for work by spinning before they sleep (its default
+// wait policy); on a machine whose cores other processes also use, a
+// spinning thread holds a core the thread it waits for needs, and a job with
+// --threads equal to the core count slows by several times. Waiting
+// passively costs a little on an idle machine and bounds the loss on a
+// shared one. libgomp reads OMP_WAIT_POLICY when it is loaded, before
+// main(): the process sets it and executes itself again, once, where the
+// user set neither it nor GOMP_SPINCOUNT (then their choice stands). If the
+// exec fails, the process goes on as it is.
+void wait_passively_by_default(char** argv) {
+    if (std::getenv("OMP_WAIT_POLICY") || std::getenv("GOMP_SPINCOUNT")) return;
+    if (::setenv("OMP_WAIT_POLICY", "passive", 1) != 0) return;
+    ::execv("/proc/self/exe", argv);
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
+    wait_passively_by_default(argv);
     // A file-size limit (ulimit -f) then fails the write with EFBIG, which
     // the writer reports and cleans up after, instead of killing the process
     // with SIGXFSZ and leaving its temporary file behind.
     std::signal(SIGXFSZ, SIG_IGN);
+    // Ctrl-C, a job's end (SIGTERM) or a closed terminal (SIGHUP) during a
+    // write removes the outputs' temporaries before the process ends.
+    tetiso::detail::remove_temporaries_on_signals();
     CLI::App app{"tetiso: reduced isosurfaces of large tetrahedral meshes, in parallel"};
     app.require_subcommand(1);
     app.set_version_flag("--version", "tetiso 0.1.0");
@@ -72,6 +94,8 @@ int main(int argc, char** argv) {
     tetiso::cli::add_run_command(app, run);
     tetiso::cli::add_reduce_command(app, run);
     tetiso::cli::add_split_command(app, run);
+    tetiso::cli::require_decimal_integers(app);
+    tetiso::cli::refuse_meaningless_combinations(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

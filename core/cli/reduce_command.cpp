@@ -24,7 +24,7 @@ double mean_edge_length(const Piece& piece) {
 
 void add_phi_option(CLI::App& cmd, double& phi) {
     cmd.add_option("--phi", phi, "Reduction threshold PHI* in (0, 1]: an edge collapses when its PHI exceeds it")
-        ->check(CLI::Range(0.0, 1.0).description("in (0, 1]"))
+        ->check(phi_check())
         ->capture_default_str();
 }
 
@@ -68,6 +68,7 @@ void run_reduce(const ReduceArguments& args) {
     surface_format(args.output);
     require_writable(args.output);
     if (!args.report.empty()) require_writable(args.report);
+    require_distinct_files({{"-o", args.output}, {"--report", args.report}}, {{"input", args.input}});
     const Device device = open_device(args.device);
     const Piece input = read_piece(args.input);
     ReduceOptions options = args.options;

@@ -125,6 +125,9 @@ void run_job(const RunArguments& args) {
             surface_format(args.output);
             require_writable(args.output);
             if (!args.report.empty()) require_writable(args.report);
+            std::vector<NamedFile> inputs = args.job.mesh.empty() ? split_files(args.job.split) : mesh_files(args.job.mesh);
+            if (!args.job.partition.empty()) inputs.push_back({"--partition", args.job.partition});
+            require_distinct_files({{"-o", args.output}, {"--report", args.report}}, inputs);
         } catch (const Error& e) {
             output_problem = e.what();
         }
@@ -233,6 +236,7 @@ void add_run_command(CLI::App& app, Command& run) {
     cmd->add_option_function<int>(
            "--attribute", [args](int k) { args->job.attribute = k; },
            "With --mesh: the field is node attribute K of BASE.node (default: --field at the nodes)")
+        ->check(index_check())
         ->needs(mesh);
     cmd->add_option("--array", job.array, "With a .vtu, .pvtu or .msh: the field is this point array ($NodeData view)")
         ->needs(mesh);

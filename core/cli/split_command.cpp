@@ -70,7 +70,7 @@ void add_split_command(CLI::App& app, Command& run) {
     cmd->add_option_function<int>(
            "--attribute", [args](int k) { args->attribute = k; },
            "The field is node attribute K of BASE.node (default: --field at the nodes)")
-        ->check(CLI::NonNegativeNumber);
+        ->check(index_check());
     cmd->add_option("-o,--output", args->output, "Directory to write (new, or empty)")->required();
     cmd->add_flag("--quiet", args->quiet, "No summary line on stderr");
     cmd->callback([&run, args, partition, domains, mesh] {

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <limits>
 
+#include "io_formats.hpp"
 #include "mapped_file.hpp"
 #include "tetiso/error.hpp"
 
@@ -68,7 +69,7 @@ private:
     T text_number(const char* what) {
         const std::string_view t = token(what);
         T value{};
-        const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), value);
+        const auto [end, ec] = std::from_chars(detail::past_plus(t.data(), t.data() + t.size()), t.data() + t.size(), value);
         if (ec != std::errc() || end != t.data() + t.size())
             fail(std::string(what) + " '" + std::string(t.substr(0, 40)) + "' is not a number of the expected kind");
         return value;
@@ -122,6 +123,7 @@ private:
     std::vector<std::uint64_t> other_count_ = std::vector<std::uint64_t>(128, 0);
     std::vector<std::pair<std::uint64_t, double>> values_;
     bool have_view_ = false;
+    std::int64_t view_step_ = 0; // the time step of the view read
     std::vector<std::string> views_;
 };
 
@@ -300,13 +302,20 @@ void MshParser::read_node_data(const std::string& view) {
     const bool wanted = name == view;
     if (wanted && components != 1)
         fail("$NodeData '" + name + "' has " + std::to_string(components) + " components; the field must be a scalar");
-    if (wanted) values_.clear(), have_view_ = true;
+    // A view is a time series when its $NodeData differ in time step (the
+    // first integer tag): the latest step is read. Two of one step would
+    // each claim to be the field.
+    const std::int64_t step = tagv[0];
+    if (wanted && have_view_ && step == view_step_)
+        fail("$NodeData '" + name + "' appears twice for time step " + std::to_string(step));
+    const bool taken = wanted && (!have_view_ || step > view_step_);
+    if (taken) values_.clear(), have_view_ = true, view_step_ = step;
     if (binary_) skip_line_end();
     for (std::int64_t e = 0; e < entries; ++e) {
         const std::int64_t tag = binary_ ? raw<std::int32_t>("a value's node tag") : text_number<std::int64_t>("a value's node tag");
         double value = 0;
         for (std::int64_t c = 0; c < components; ++c) value = real_value("a value");
-        if (!wanted) continue;
+        if (!taken) continue;
         if (tag < 0) fail("$NodeData '" + name + "' gives a value to negative node tag " + std::to_string(tag));
         if (!(std::abs(value) <= std::numeric_limits<float>::max()))
             fail("$NodeData '" + name + "': the value of node " + std::to_string(tag) + " is not a finite number in float range");

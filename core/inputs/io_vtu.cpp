@@ -66,18 +66,48 @@ std::string cell_type_name(int type) {
     case 1: return "vertex";
     case 3: return "line";
     case 5: return "triangle";
+    case 8: return "pixel";
     case 9: return "quad";
     case 10: return "tetrahedron";
     case 11: return "voxel";
     case 12: return "hexahedron";
     case 13: return "wedge";
     case 14: return "pyramid";
+    case 21: return "quadratic edge";
+    case 22: return "quadratic triangle";
+    case 23: return "quadratic quad";
     case 24: return "quadratic tetrahedron";
     case 25: return "quadratic hexahedron";
+    case 28: return "biquadratic quad";
+    case 30: return "quadratic linear quad";
+    case 34: return "biquadratic triangle";
+    case 35: return "cubic line";
     case 42: return "polyhedron";
     case 71: return "Lagrange tetrahedron";
     case 72: return "Lagrange hexahedron";
     default: return "type " + std::to_string(type);
+    }
+}
+
+// The corners of a lower-dimensional type of fixed size, or 0 for a type
+// whose size varies (poly-vertex, polyline, strip, polygon, Lagrange and
+// Bezier cells) or any other type. A cell of such a type with another count
+// is a mistake, not a boundary marker: a tetrahedron written as a triangle
+// with 4 corners would otherwise be skipped, leaving a hole.
+int fixed_corner_count(int type) {
+    switch (type) {
+    case 1: return 1;
+    case 3: return 2;
+    case 5: return 3;
+    case 8: case 9: return 4;
+    case 21: return 3;
+    case 22: return 6;
+    case 23: return 8;
+    case 28: return 9;
+    case 30: return 6;
+    case 34: return 7;
+    case 35: return 4;
+    default: return 0;
     }
 }
 
@@ -407,6 +437,8 @@ std::vector<T> VtuParser::read_array(const pugi::xml_node& array, std::uint64_t 
             while (at < end && std::isspace(static_cast<unsigned char>(*at))) ++at;
             if (at == end) break;
             if (out.size() == count) fail(what + ": more than the " + std::to_string(count) + " values expected");
+            const char* const token = at;
+            at = detail::past_plus(at, end);
             if (is_integer(*scalar)) {
                 std::int64_t value = 0;
                 const auto [next, ec] = std::from_chars(at, end, value);
@@ -430,7 +462,9 @@ std::vector<T> VtuParser::read_array(const pugi::xml_node& array, std::uint64_t 
                 out.push_back(convert_value<T>(value, ok));
                 at = next;
             }
-            if (!ok) fail(what + ": value " + std::to_string(out.size() - 1) + " is out of range");
+            if (!ok)
+                fail(what + ": value " + std::to_string(out.size() - 1) + " (" + std::string(token, at) +
+                     ") is out of range for its use");
         }
         if (out.size() != count)
             fail(what + ": " + std::to_string(out.size()) + " values, where " + std::to_string(count) + " are expected");
@@ -558,6 +592,9 @@ MeshArrays VtuParser::parse(const VtuRequest& request) {
             out.tets.insert(out.tets.end(), v, v + 4);
         } else if (!lower_dimensional(type)) {
             ++other[static_cast<std::size_t>(type)];
+        } else if (fixed_corner_count(type) != 0 && corners != fixed_corner_count(type)) {
+            fail("cell " + std::to_string(c) + " is a " + cell_type_name(type) + " with " + std::to_string(corners) +
+                 " corners (type " + std::to_string(type) + " has " + std::to_string(fixed_corner_count(type)) + ")");
         }
         previous = end;
     }

@@ -27,7 +27,7 @@ std::string MeshSource::field_description() const {
     return field ? field->description() : std::string();
 }
 
-bool negatively_oriented(const Domain& d, std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t e) {
+double signed_volume6(const Domain& d, std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t e) {
     const auto p = [&](std::int32_t v, int axis) {
         const auto i = static_cast<std::size_t>(v);
         return static_cast<double>(axis == 0 ? d.x[i] : axis == 1 ? d.y[i] : d.z[i]);
@@ -38,10 +38,25 @@ bool negatively_oriented(const Domain& d, std::int32_t a, std::int32_t b, std::i
         v[k] = p(c, k) - p(a, k);
         w[k] = p(e, k) - p(a, k);
     }
-    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]) < 0;
+    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]);
 }
 
-Domain domain_from_arrays(MeshArrays arrays, const Field* field) {
+bool negatively_oriented(const Domain& d, std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t e) {
+    return signed_volume6(d, a, b, c, e) < 0;
+}
+
+void orient_tetrahedra(Domain& domain, const std::string& name) {
+    for (std::size_t t = 0; t < domain.tet_count(); ++t) {
+        std::int32_t* v = domain.tets.data() + 4 * t;
+        const double volume = signed_volume6(domain, v[0], v[1], v[2], v[3]);
+        if (volume == 0)
+            throw Error(name + ": tetrahedron " + std::to_string(t) +
+                        " has zero volume (its corners, as stored in float, are coplanar)");
+        if (volume < 0) std::swap(v[2], v[3]);
+    }
+}
+
+Domain domain_from_arrays(MeshArrays arrays, const Field* field, const std::string& name) {
     Domain domain;
     const std::size_t n = arrays.x.size();
     domain.x.assign(arrays.x.begin(), arrays.x.end());
@@ -59,10 +74,7 @@ Domain domain_from_arrays(MeshArrays arrays, const Field* field) {
     domain.interface.assign(n, 0);
     domain.tets = std::move(arrays.tets);
     // Extraction orients triangles from positively oriented tetrahedra.
-    for (std::size_t t = 0; t < domain.tet_count(); ++t) {
-        std::int32_t* v = domain.tets.data() + 4 * t;
-        if (negatively_oriented(domain, v[0], v[1], v[2], v[3])) std::swap(v[2], v[3]);
-    }
+    orient_tetrahedra(domain, name);
     return domain;
 }
 
@@ -127,10 +139,15 @@ Domain read_mesh(const MeshSource& source, std::vector<std::int32_t>* piece_of_t
     case MeshFormat::vtu: {
         VtuRequest request;
         request.array = source.array;
-        return domain_from_arrays(read_vtu(source.path, request), source.field);
+        MeshArrays arrays = read_vtu(source.path, request);
+        // As a .pvtu piece of ghosts alone is refused: a surface would be empty.
+        if (arrays.tets.empty() && arrays.ghost_cells > 0)
+            throw Error(source.path.string() + ": no tetrahedra besides its " + std::to_string(arrays.ghost_cells) +
+                        " ghost cells");
+        return domain_from_arrays(std::move(arrays), source.field, source.path.string());
     }
     case MeshFormat::msh:
-        return domain_from_arrays(read_msh(source.path, source.array), source.field);
+        return domain_from_arrays(read_msh(source.path, source.array), source.field, source.path.string());
     case MeshFormat::pvtu:
         return join_pieces(PvtuPartition(source), piece_of_tet);
     }

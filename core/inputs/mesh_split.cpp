@@ -136,12 +136,11 @@ void require_new_split_directory(const std::filesystem::path& dir) {
 
 void write_mesh_split(const Partition& partition, double default_level, const std::filesystem::path& dir) {
     require_new_split_directory(dir);
-    // Written beside the target and renamed into place: a failed split
-    // leaves nothing behind.
-    write_atomically(dir, [&](const std::filesystem::path& temporary) {
-        std::error_code ec;
-        if (!std::filesystem::create_directory(temporary, ec) || ec)
-            throw Error(dir.string() + ": cannot write: " + (ec ? ec.message() : std::string("cannot create ") + temporary.string()));
+    // Written into a new directory beside the target and renamed into
+    // place: a failed split leaves nothing behind.
+    write_atomically(
+        dir,
+        [&](const std::filesystem::path& temporary) {
         const int domains = partition.domain_count();
         std::vector<std::uint64_t> domain_digests(static_cast<std::size_t>(domains)), edge_digests(domain_digests);
         std::vector<std::string> names(static_cast<std::size_t>(domains));
@@ -200,7 +199,8 @@ void write_mesh_split(const Partition& partition, double default_level, const st
         index.put_array(domain_digests);
         index.put_array(edge_digests);
         index.write(split_index_file(temporary));
-    });
+        },
+        /*directory=*/true);
 }
 
 SplitMeshPartition::SplitMeshPartition(std::filesystem::path dir) : dir_(std::move(dir)) {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <numeric>
@@ -91,8 +92,8 @@ LoadedPiece load_piece(std::string_view bytes, const std::filesystem::path& path
     return piece;
 }
 
-// Calls found(u, v, w) for every face of `tets` that only one tetrahedron
-// has. Faces are bucketed by their smallest corner (a counting sort) and
+// Calls found(u, v, w, t) for every face of `tets` that only one
+// tetrahedron, t, has. Faces are bucketed by their smallest corner (a counting sort) and
 // each bucket, a dozen faces or so, sorted on its own: for 23 M faces this
 // is several times faster than sorting them all.
 template <class Found>
@@ -114,29 +115,69 @@ void for_each_boundary_face(const std::vector<std::int32_t>& tets, std::size_t n
             ++first[static_cast<std::size_t>(f[0]) + 1];
         }
     for (std::size_t v = 0; v < nodes; ++v) first[v + 1] += first[v];
-    std::vector<std::uint64_t> rest(4 * count); // (middle, largest) corner of each face
+    struct Rest {
+        std::uint64_t corners; // (middle, largest) corner of the face
+        std::uint32_t tet;     // the tetrahedron it is a face of
+    };
+    std::vector<Rest> rest(4 * count);
     {
         std::vector<std::int64_t> fill(first.begin(), first.end() - 1);
         for (std::size_t t = 0; t < count; ++t)
             for (int skip = 0; skip < 4; ++skip) {
                 std::int32_t f[3];
                 face(t, skip, f);
-                rest[static_cast<std::size_t>(fill[static_cast<std::size_t>(f[0])]++)] =
-                    static_cast<std::uint64_t>(f[1]) << 32 | static_cast<std::uint32_t>(f[2]);
+                rest[static_cast<std::size_t>(fill[static_cast<std::size_t>(f[0])]++)] = {
+                    static_cast<std::uint64_t>(f[1]) << 32 | static_cast<std::uint32_t>(f[2]), static_cast<std::uint32_t>(t)};
             }
     }
+    // Only the order of different faces matters: a face found twice is
+    // interior and skipped, whichever tetrahedron comes first.
+    const auto by_corners = [](const Rest& a, const Rest& b) { return a.corners < b.corners; };
     for (std::size_t v = 0; v < nodes; ++v) {
         const auto begin = rest.begin() + first[v], end = rest.begin() + first[v + 1];
-        std::sort(begin, end);
+        std::sort(begin, end, by_corners);
         for (auto i = begin; i != end;) {
             auto j = i + 1;
-            while (j != end && *j == *i) ++j;
+            while (j != end && j->corners == i->corners) ++j;
             if (j - i == 1)
-                found(static_cast<std::int32_t>(v), static_cast<std::int32_t>(*i >> 32), static_cast<std::int32_t>(*i & 0xffffffffu));
+                found(static_cast<std::int32_t>(v), static_cast<std::int32_t>(i->corners >> 32),
+                      static_cast<std::int32_t>(i->corners & 0xffffffffu), static_cast<std::size_t>(i->tet));
             i = j;
         }
     }
 }
+
+// How far the copies of one shared node may lie apart, as a fraction of the
+// mesh's mean edge length; and how many units of float rounding (of the
+// larger magnitude) any two copies of a coordinate or a value may differ by.
+constexpr double kPositionTolerance = 1e-4;
+constexpr double kValueUlps = 4;
+
+// Whether a and b agree: within `absolute`, or within kValueUlps of float
+// rounding of the larger.
+bool within(float a, float b, double absolute) {
+    const double difference = std::abs(static_cast<double>(a) - static_cast<double>(b));
+    const double scale = std::max(std::abs(static_cast<double>(a)), std::abs(static_cast<double>(b)));
+    return difference <= absolute || difference <= kValueUlps * std::numeric_limits<float>::epsilon() * scale;
+}
+
+// A float's bits as an integer that sorts as the float does, -0 before +0: a
+// total order, so that the smallest copy of a node is one whatever its pieces' order.
+std::uint32_t ordered(float value) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &value, sizeof bits);
+    return bits & 0x80000000u ? ~bits : bits | 0x80000000u;
+}
+
+// Enough digits to tell any two different doubles apart.
+std::string full_precision(double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.17g", value);
+    return text;
+}
+
+// A tetrahedron by its four global node ids, sorted.
+using TetIds = std::array<GlobalId, 4>;
 
 // A node on a piece's boundary, as the scan records it.
 struct BoundaryNode {
@@ -158,6 +199,9 @@ struct PieceScan {
     std::uint64_t digest = 0;
     std::vector<BoundaryNode> nodes;
     std::vector<std::pair<EdgeKey, int>> edges;
+    // The tetrahedra with a face on the boundary, each as its sorted node
+    // ids: two pieces that hold one tetrahedron overlap (see the check).
+    std::vector<TetIds> boundary_tets;
     std::string error;
 };
 
@@ -185,7 +229,11 @@ PieceScan scan_piece(const std::filesystem::path& path, const MeshSource& source
                     scan.edge_sum += std::sqrt(dx * dx + dy * dy + dz * dz);
                 }
         std::vector<std::int32_t> on_boundary;
-        for_each_boundary_face(a.tets, a.x.size(), [&](std::int32_t u, std::int32_t v, std::int32_t w) {
+        for_each_boundary_face(a.tets, a.x.size(), [&](std::int32_t u, std::int32_t v, std::int32_t w, std::size_t t) {
+            TetIds tet;
+            for (int k = 0; k < 4; ++k) tet[static_cast<std::size_t>(k)] = a.ids[static_cast<std::size_t>(a.tets[4 * t + static_cast<std::size_t>(k)])];
+            std::sort(tet.begin(), tet.end());
+            scan.boundary_tets.push_back(tet);
             const std::int32_t f[3] = {u, v, w};
             for (int e = 0; e < 3; ++e) {
                 const GlobalId g = a.ids[static_cast<std::size_t>(f[e])];
@@ -196,6 +244,8 @@ PieceScan scan_piece(const std::filesystem::path& path, const MeshSource& source
         });
         std::sort(scan.edges.begin(), scan.edges.end());
         scan.edges.erase(std::unique(scan.edges.begin(), scan.edges.end()), scan.edges.end());
+        std::sort(scan.boundary_tets.begin(), scan.boundary_tets.end());
+        scan.boundary_tets.erase(std::unique(scan.boundary_tets.begin(), scan.boundary_tets.end()), scan.boundary_tets.end());
         std::sort(on_boundary.begin(), on_boundary.end());
         on_boundary.erase(std::unique(on_boundary.begin(), on_boundary.end()), on_boundary.end());
         for (const std::int32_t v : on_boundary) {
@@ -231,6 +281,7 @@ std::string pack(const std::string& error, const std::vector<std::pair<int, Piec
         std::vector<EdgeKey> keys; // the piece of each is p
         for (const auto& edge : scan.edges) keys.push_back(edge.first);
         out.put_array(keys);
+        out.put_array(scan.boundary_tets);
     }
     return std::move(out.bytes);
 }
@@ -282,6 +333,7 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
                 scan.error.assign(piece_error.begin(), piece_error.end());
                 scan.nodes = in.get_array<BoundaryNode>();
                 for (const EdgeKey key : in.get_array<EdgeKey>()) scan.edges.push_back({key, static_cast<int>(p)});
+                scan.boundary_tets = in.get_array<TetIds>();
             }
         }
         if (!first_error.empty()) throw Error(first_error);
@@ -290,6 +342,27 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
             if (!scan.error.empty()) throw Error(scan.error);
     }
     const int parts = static_cast<int>(pieces_.size());
+
+    // Pieces that overlap (one listed twice, under two names, or holding the
+    // whole mesh each, as VTK writes an unstreamed grid in several pieces;
+    // cells shared but not marked as ghosts) hold a tetrahedron of the one's
+    // boundary in the other too; where that one is on both boundaries it is
+    // found here, before any task. Those on one boundary only are not.
+    {
+        std::vector<std::pair<TetIds, int>> held;
+        for (int p = 0; p < static_cast<int>(scans.size()); ++p)
+            for (const TetIds& tet : scans[static_cast<std::size_t>(p)].boundary_tets) held.push_back({tet, p});
+        std::sort(held.begin(), held.end());
+        for (std::size_t i = 1; i < held.size(); ++i)
+            if (held[i].first == held[i - 1].first) {
+                const TetIds& t = held[i].first;
+                throw Error(pieces_[static_cast<std::size_t>(held[i].second)].string() +
+                            ": the tetrahedron of node ids " + std::to_string(t[0]) + ", " + std::to_string(t[1]) +
+                            ", " + std::to_string(t[2]) + ", " + std::to_string(t[3]) + " is also in " +
+                            pieces_[static_cast<std::size_t>(held[i - 1].second)].string() +
+                            ": pieces overlap (a cell two pieces hold must be a ghost, vtkGhostType, in all but one)");
+            }
+    }
 
     std::vector<std::int64_t> part_tets(pieces_.size());
     std::vector<std::pair<EdgeKey, int>> boundary_edges;
@@ -310,24 +383,47 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
     std::sort(boundary_edges.begin(), boundary_edges.end());
     spacing_ = edge_sum / static_cast<double>(6 * tet_count_);
 
-    // Shared nodes: the first piece's position; values that must agree.
+    // Shared nodes: each takes the smallest of the positions and values its
+    // pieces give (the pieces' order does not matter), and every other must
+    // lie within the tolerance of it: a position within kPositionTolerance
+    // of the mean edge length, a value within kValueUlps of float rounding
+    // of the larger magnitude (the same rule for both, at least a few ulps
+    // of float, which solvers' ranks may disagree by).
     std::sort(boundary_nodes.begin(), boundary_nodes.end());
     node_count_ = used_nodes;
+    const auto describe = [&](const BoundaryNode& n) {
+        return "(" + full_precision(n.x) + ", " + full_precision(n.y) + ", " + full_precision(n.z) + ")";
+    };
     for (std::size_t i = 0; i < boundary_nodes.size();) {
         std::size_t j = i + 1;
         while (j < boundary_nodes.size() && boundary_nodes[j].id == boundary_nodes[i].id) ++j;
         if (j - i > 1) {
-            const BoundaryNode& first = boundary_nodes[i];
+            const auto smallest = [](const BoundaryNode& a, const BoundaryNode& b) {
+                return std::make_tuple(ordered(a.x), ordered(a.y), ordered(a.z), ordered(a.f)) <
+                       std::make_tuple(ordered(b.x), ordered(b.y), ordered(b.z), ordered(b.f));
+            };
+            const BoundaryNode& chosen = *std::min_element(boundary_nodes.begin() + static_cast<std::ptrdiff_t>(i),
+                                                           boundary_nodes.begin() + static_cast<std::ptrdiff_t>(j), smallest);
+            const std::string& chosen_piece = pieces_[static_cast<std::size_t>(chosen.piece)].string();
             node_count_ -= static_cast<std::int64_t>(j - i - 1);
-            for (std::size_t k = i + 1; k < j && !source.array.empty(); ++k)
-                if (boundary_nodes[k].f != first.f)
-                    throw Error(pieces_[static_cast<std::size_t>(boundary_nodes[k].piece)].string() + ": node id " +
-                                std::to_string(first.id) + " has value " + std::to_string(boundary_nodes[k].f) +
-                                " of '" + source.array + "', where " +
-                                pieces_[static_cast<std::size_t>(first.piece)].string() + " gives it " +
-                                std::to_string(first.f));
-            shared_nodes_.push_back(first.id);
-            shared_xyz_.insert(shared_xyz_.end(), {first.x, first.y, first.z});
+            for (std::size_t k = i; k < j; ++k) {
+                const BoundaryNode& other = boundary_nodes[k];
+                const std::string& other_piece = pieces_[static_cast<std::size_t>(other.piece)].string();
+                if (!within(other.x, chosen.x, kPositionTolerance * spacing_) ||
+                    !within(other.y, chosen.y, kPositionTolerance * spacing_) ||
+                    !within(other.z, chosen.z, kPositionTolerance * spacing_))
+                    throw Error(other_piece + ": node id " + std::to_string(chosen.id) + " is at " + describe(other) +
+                                ", where " + chosen_piece + " puts it at " + describe(chosen) +
+                                ": farther apart than " + full_precision(kPositionTolerance) +
+                                " of the mean edge length " + full_precision(spacing_));
+                if (!source.array.empty() && !within(other.f, chosen.f, 0))
+                    throw Error(other_piece + ": node id " + std::to_string(chosen.id) + " has value " +
+                                full_precision(other.f) + " of '" + source.array + "', where " + chosen_piece +
+                                " gives it " + full_precision(chosen.f) + ": more than float rounding apart");
+            }
+            shared_nodes_.push_back(chosen.id);
+            shared_xyz_.insert(shared_xyz_.end(), {chosen.x, chosen.y, chosen.z});
+            shared_f_.push_back(chosen.f);
         }
         i = j;
     }
@@ -417,17 +513,20 @@ Domain PvtuPartition::make_domain(int domain) const {
     out.z.assign(pz.begin(), pz.end());
     out.f.resize(n);
     if (!source_.array.empty()) {
-        for (std::size_t i = 0; i < n; ++i) out.f[i] = static_cast<float>(a.f[static_cast<std::size_t>(piece.used[i])]);
+        for (std::size_t i = 0; i < n; ++i) {
+            out.f[i] = static_cast<float>(a.f[static_cast<std::size_t>(piece.used[i])]);
+            // A shared node's value as every piece takes it (see the scan).
+            const auto shared = std::lower_bound(shared_nodes_.begin(), shared_nodes_.end(), out.gid[i]);
+            if (shared != shared_nodes_.end() && *shared == out.gid[i])
+                out.f[i] = shared_f_[static_cast<std::size_t>(shared - shared_nodes_.begin())];
+        }
     } else {
         // At the positions every piece agrees on, so shared nodes get one value.
         source_.field->evaluate(px.data(), py.data(), pz.data(), n, out.f.data());
     }
     out.tets.resize(a.tets.size());
     for (std::size_t i = 0; i < a.tets.size(); ++i) out.tets[i] = local[static_cast<std::size_t>(a.tets[i])];
-    for (std::size_t t = 0; t < out.tet_count(); ++t) {
-        std::int32_t* v = out.tets.data() + 4 * t;
-        if (negatively_oriented(out, v[0], v[1], v[2], v[3])) std::swap(v[2], v[3]);
-    }
+    orient_tetrahedra(out, path.string());
     out.interface.assign(n, 0);
     for (std::size_t e = 0; e < shared_keys_.size(); ++e) {
         const auto first = shared_domains_.begin() + shared_first_[e], last = shared_domains_.begin() + shared_first_[e + 1];

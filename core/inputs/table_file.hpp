@@ -41,8 +41,9 @@ public:
         if (i >= fields_.size()) fail(std::string("missing ") + what);
         const std::string& text = fields_[i];
         T value{};
-        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-        if (ec != std::errc() || end != text.data() + text.size())
+        const char* const last = text.data() + text.size();
+        const auto [end, ec] = std::from_chars(past_plus(text.data(), last), last, value);
+        if (ec != std::errc() || end != last)
             fail(std::string(what) + " '" + text + "' is not a number of the expected kind");
         return value;
     }

@@ -106,7 +106,9 @@ Domain read_tetgen(const TetgenSource& source) {
         }
         // Extraction orients triangles from a positively oriented reference
         // tetrahedron; TetGen's own order is not that, so fix it here.
-        if (negatively_oriented(domain, v[0], v[1], v[2], v[3])) std::swap(v[2], v[3]);
+        const double volume = signed_volume6(domain, v[0], v[1], v[2], v[3]);
+        if (volume == 0) ele_file.fail("tetrahedron " + std::to_string(t) + " has zero volume (its corners, as stored in float, are coplanar)");
+        if (volume < 0) std::swap(v[2], v[3]);
         domain.tets.insert(domain.tets.end(), v, v + 4);
     }
     return domain;

@@ -2,13 +2,13 @@
 #include "tetiso/io.hpp"
 
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <fstream>
-#include <iterator>
 #include <limits>
 #include <random>
 #include <string>
@@ -30,7 +30,7 @@ const char* kind_of(const std::filesystem::file_status& status) {
     case std::filesystem::file_type::block: return "a block device";
     case std::filesystem::file_type::fifo: return "a pipe";
     case std::filesystem::file_type::socket: return "a socket";
-    default: return "not a regular file";
+    default: return "neither a regular file nor a directory";
     }
 }
 
@@ -96,6 +96,20 @@ void remove_stale_temporaries(const std::filesystem::path& target) {
     }
 }
 
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
+    struct stat at {}, bt {};
+    if (::stat(a.c_str(), &at) == 0 && ::stat(b.c_str(), &bt) == 0)
+        return at.st_dev == bt.st_dev && at.st_ino == bt.st_ino;
+    const auto resolved = [](const std::filesystem::path& path) {
+        std::error_code ec;
+        std::filesystem::path absolute = std::filesystem::absolute(path, ec);
+        if (ec) absolute = path;
+        std::filesystem::path canonical = std::filesystem::weakly_canonical(absolute, ec);
+        return ec ? absolute.lexically_normal() : canonical;
+    };
+    return resolved(a) == resolved(b);
+}
+
 std::string name_output_in(std::string message, const std::filesystem::path& temporary,
                            const std::filesystem::path& path) {
     const std::string from = temporary.string(), to = path.string();
@@ -104,9 +118,18 @@ std::string name_output_in(std::string message, const std::filesystem::path& tem
     return message;
 }
 
-std::ifstream open_for_reading(const std::filesystem::path& path) {
+void require_regular_file(const std::filesystem::path& path) {
+    // A device has no end (/dev/zero, a link to it, a .pvtu piece naming
+    // it) and a pipe may never deliver one, nor let open() return.
     std::error_code error;
-    if (std::filesystem::is_directory(path, error)) throw Error(path.string() + ": is a directory, not a file");
+    const std::filesystem::file_status status = std::filesystem::status(path, error); // through links
+    if (std::filesystem::is_directory(status)) throw Error(path.string() + ": is a directory, not a file");
+    if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+        throw Error(path.string() + ": not a regular file (it is " + kind_of(status) + ")");
+}
+
+std::ifstream open_for_reading(const std::filesystem::path& path) {
+    require_regular_file(path);
     std::ifstream file(path, std::ios::binary);
     if (!file) throw Error(path.string() + ": cannot open for reading");
     return file;
@@ -115,17 +138,12 @@ std::ifstream open_for_reading(const std::filesystem::path& path) {
 std::string read_whole_file(const std::filesystem::path& path) {
     std::ifstream file = open_for_reading(path);
     std::error_code error;
-    std::string bytes;
-    if (std::filesystem::is_regular_file(path, error)) {
-        const std::uintmax_t size = std::filesystem::file_size(path, error);
-        if (error) throw Error(path.string() + ": cannot read its size (" + error.message() + ")");
-        bytes.resize(static_cast<std::size_t>(size));
-        file.read(bytes.data(), static_cast<std::streamsize>(size));
-        if (file.gcount() != static_cast<std::streamsize>(size))
-            throw Error(path.string() + ": cannot read it whole (it changed while being read?)");
-    } else { // a pipe or a device: no size to ask for
-        bytes.assign(std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>());
-    }
+    const std::uintmax_t size = std::filesystem::file_size(path, error); // never more than this is read
+    if (error) throw Error(path.string() + ": cannot read its size (" + error.message() + ")");
+    std::string bytes(static_cast<std::size_t>(size), '\0');
+    file.read(bytes.data(), static_cast<std::streamsize>(size));
+    if (file.gcount() != static_cast<std::streamsize>(size))
+        throw Error(path.string() + ": cannot read it whole (it changed while being read?)");
     if (file.bad()) throw Error(path.string() + ": read failed");
     return bytes;
 }

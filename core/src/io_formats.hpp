@@ -40,16 +40,30 @@ inline constexpr char kFlagsName[] = "tetiso_flags";
 // is left of the bound.
 inline constexpr char kErrorBoundName[] = "tetiso_error_bound";
 
+// Throws tetiso::Error naming `path` when it is there but is not a regular
+// file, through any links: a directory (which opens on Linux and then fails,
+// or reads as empty, only when read), a device such as /dev/zero (no end),
+// a pipe (an open() that may never return) or a socket.
+void require_regular_file(const std::filesystem::path& path);
+
 // `path` opened for reading in binary mode. Throws tetiso::Error naming it
-// when it cannot be opened or is a directory (which opens on Linux and then
-// fails, or reads as empty, only when read).
+// when it cannot be opened or is not a regular file (require_regular_file).
 std::ifstream open_for_reading(const std::filesystem::path& path);
 
 // The whole file, read in one call: through istreambuf_iterator, byte by
 // byte, a 38 MB PLY took 0.39-0.61 s on the 2-core VM against 0.22-0.26 s.
 // Throws tetiso::Error naming the file when it cannot be opened or read
-// (a directory, a file that shrinks while read). A pipe is read to its end.
+// (not a regular file, a file that shrinks while read); never reads more
+// than the size the file had when opened.
 std::string read_whole_file(const std::filesystem::path& path);
+
+// Where an ASCII number starting at `at` begins for std::from_chars: past a
+// leading '+' followed by a digit or a point, which C's strtod and scanf
+// take (and so VTK, Gmsh and TetGen) and from_chars does not; "+-1" and a
+// '+' alone stay refused.
+inline const char* past_plus(const char* at, const char* end) {
+    return end - at > 1 && *at == '+' && ((at[1] >= '0' && at[1] <= '9') || at[1] == '.') ? at + 1 : at;
+}
 
 // Checks indices and coordinates and restores the key order; shared by readers.
 void validate_and_order(Piece& piece, const std::filesystem::path& path);

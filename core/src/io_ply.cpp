@@ -174,7 +174,7 @@ private:
             while (position_ < data_.size() && std::isspace(static_cast<unsigned char>(data_[position_]))) ++position_;
             const char* first = data_.data() + position_;
             const char* last = data_.data() + data_.size();
-            const auto [end, error] = std::from_chars(first, last, value);
+            const auto [end, error] = std::from_chars(past_plus(first, last), last, value);
             if (error != std::errc()) return false;
             position_ += static_cast<std::size_t>(end - first);
             return true;

@@ -248,5 +248,42 @@ TEST_F(Files, OutputsNeverReplaceWhatIsNotARegularFile) {
     EXPECT_EQ(files(), 3u);
 }
 
+// Two outputs of one command that are one file (through a link, a hard link
+// or "..") would replace each other at commit: the second is refused, and
+// nothing is left.
+TEST_F(Files, OneFileIsNeverTwoOutputs) {
+    const Piece piece = test::lattice_surface(8, 1, "sphere");
+    write_piece(piece, at("s.ply"));
+    fs::create_symlink("s.ply", at("link.ply"));
+    fs::create_hard_link(at("s.ply"), at("hard.ply"));
+    fs::create_directory(at("sub"));
+    for (const fs::path& other : {at("link.ply"), at("hard.ply"), at("sub") / ".." / "s.ply", at("s.ply")}) {
+        OutputFiles output;
+        write_piece(piece, at("s.ply"), output);
+        EXPECT_THROW(write_piece(piece, other, output), Error) << other;
+    }
+    EXPECT_TRUE(detail::same_file(at("s.ply"), at("hard.ply")));
+    EXPECT_FALSE(detail::same_file(at("s.ply"), at("t.ply")));
+    EXPECT_TRUE(detail::same_file(at("t.ply"), at("sub") / ".." / "t.ply")) << "neither exists: by resolved path";
+    EXPECT_EQ(files(), 4u) << "a temporary was left";
+}
+
+// Temporaries are created exclusively, each under a name of its own, and
+// gone once committed or discarded.
+TEST_F(Files, TemporariesAreNewFiles) {
+    const fs::path first = detail::create_temporary(at("s.ply"), false, at("s.ply"));
+    const fs::path second = detail::create_temporary(at("s.ply"), true, at("s.ply"));
+    EXPECT_NE(first, second);
+    EXPECT_TRUE(fs::is_regular_file(first));
+    EXPECT_EQ(fs::file_size(first), 0u);
+    EXPECT_TRUE(fs::is_directory(second));
+    for (const fs::path& p : {first, second}) {
+        fs::remove(p);
+        detail::forget_temporary(p);
+    }
+    EXPECT_THROW(detail::create_temporary(at("missing/s.ply"), false, at("missing/s.ply")), Error);
+    EXPECT_EQ(files(), 0u);
+}
+
 } // namespace
 } // namespace tetiso

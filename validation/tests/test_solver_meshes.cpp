@@ -384,6 +384,55 @@ MeshSource two_pieces(const Scratch& scratch) {
     return source;
 }
 
+// The copies of a shared node may differ by float rounding (a value) or by
+// a small fraction of an edge (a position): the node takes the smallest
+// copy whatever the pieces' order, so both orders give the same domains.
+// Copies farther apart are refused, both printed in full, in either order.
+TEST(SolverMeshes, SharedNodesAgreeWithinATolerance) {
+    const Scratch scratch;
+    const std::vector<std::array<double, 3>> face = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    auto a_points = face, b_points = face;
+    a_points.push_back({0, 0, 1});
+    b_points[1] = {1.000001, 0, 0};
+    b_points.push_back({0, 0, -1});
+    scratch.write("a.vtu", ascii_piece(a_points, {0, 1, 2, 3}, {0, 1, 4, 3}, {0, 1, 2, 3}));
+    scratch.write("b.vtu", ascii_piece(b_points, {0, 1, 2, 4}, {0, 1, 4.000001, 4}, {0, 1, 2, 3}));
+    const MeshSource source = two_pieces(scratch);
+    scratch.write("reversed.pvtu", "<VTKFile type=\"PUnstructuredGrid\"><PUnstructuredGrid><Piece Source=\"b.vtu\"/>"
+                                   "<Piece Source=\"a.vtu\"/></PUnstructuredGrid></VTKFile>");
+    MeshSource reversed = source;
+    reversed.path = scratch.path("reversed.pvtu");
+    {
+        const PvtuPartition forward(source), backward(reversed);
+        for (int d = 0; d < 2; ++d) {
+            int e = 0;
+            while (backward.piece_path(e) != forward.piece_path(d)) ++e;
+            const Domain one = forward.make_domain(d), other = backward.make_domain(e);
+            EXPECT_EQ(one.gid, other.gid);
+            EXPECT_TRUE(test::same_bits(one.x, other.x) && test::same_bits(one.y, other.y) &&
+                        test::same_bits(one.z, other.z) && test::same_bits(one.f, other.f))
+                << forward.piece_path(d) << " depends on the pieces' order";
+            for (std::size_t v = 0; v < one.node_count(); ++v) {
+                if (one.gid[v] == 1) {
+                    EXPECT_EQ(one.x[v], 1.0f) << "the smaller copy";
+                }
+                if (one.gid[v] == 2) {
+                    EXPECT_EQ(one.f[v], 4.0f) << "the smaller copy";
+                }
+            }
+        }
+    }
+    b_points[1] = {2, 0, 0};
+    scratch.write("b.vtu", ascii_piece(b_points, {0, 1, 2, 4}, {0, 1, 4, 4}, {0, 1, 2, 3}));
+    for (const MeshSource& order : {source, reversed}) {
+        const std::string what = pvtu_error(order);
+        EXPECT_NE(what.find(scratch.path("b.vtu").string() + ": node id 1 is at (2, 0, 0), where " +
+                            scratch.path("a.vtu").string() + " puts it at (1, 0, 0)"),
+                  std::string::npos)
+            << what;
+    }
+}
+
 TEST(SolverMeshes, PiecesThatDisagreeOnAValueAreRefused) {
     const Scratch scratch;
     // Two tetrahedra sharing the face of ids 0, 1, 2, one per piece.

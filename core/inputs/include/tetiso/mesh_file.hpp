@@ -64,10 +64,23 @@ Domain read_mesh(const MeshSource& source, std::vector<std::int32_t>* piece_of_t
 // A Domain from arrays a reader produced: coordinates stored as float, the
 // field taken from `arrays.f` or evaluated by `field` at the coordinates as
 // read, tetrahedra reoriented where negative. Node i gets global id i.
-Domain domain_from_arrays(MeshArrays arrays, const Field* field);
+// Throws tetiso::Error (naming `name`, the file) for a tetrahedron of zero
+// volume (orient_tetrahedra).
+Domain domain_from_arrays(MeshArrays arrays, const Field* field, const std::string& name = "the mesh");
 
 // Whether tetrahedron (a, b, c, d) of `domain` is negatively oriented, in
 // double precision over its stored (float) coordinates.
 bool negatively_oriented(const Domain& domain, std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t d);
+// Six times the signed volume of tetrahedron (a, b, c, d) of `domain`, in
+// double precision over its stored (float) coordinates.
+double signed_volume6(const Domain& domain, std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t d);
+// Orients every tetrahedron positively, each by its own corners (two swapped
+// where its volume is negative): a mesh listing its tetrahedra in mixed
+// corner orders reads right. Throws tetiso::Error naming `name` and the
+// tetrahedron (counting tetrahedra only, in the file's order) for one of zero
+// volume, which has no orientation. A tangled mesh (tetrahedra that overlap,
+// as where a node was moved across a face) is not detected: its surface
+// overlaps where its tetrahedra do.
+void orient_tetrahedra(Domain& domain, const std::string& name);
 
 } // namespace tetiso

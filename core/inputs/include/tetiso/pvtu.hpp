@@ -11,14 +11,20 @@
 // the merge tree (heavy-edge matching, as MeshPartition builds it) and the
 // checks between pieces, in memory of the order of the pieces' surfaces. A
 // task then reads its piece again, alone. Ghost cells (vtkGhostType) are
-// skipped, so pieces do not overlap.
+// skipped, so pieces do not overlap; pieces that still do (one listed twice
+// or under two names, each holding the whole mesh, cells shared but not
+// marked as ghosts) are refused by the scan where a tetrahedron lies on the
+// boundary of both, naming it and the two pieces.
 //
 // Solvers write a shared node from every rank that holds it, and its
-// coordinates need not carry the same bits in each: a shared node takes the
-// position of the first piece (in the .pvtu's order) that holds it, so that
-// every piece places the isosurface vertices on a shared edge identically.
-// Its field values must agree exactly; otherwise the pieces are refused,
-// naming them.
+// coordinates and values need not carry the same bits in each: a shared node
+// takes the smallest position and value its pieces give (whatever the
+// pieces' order), so that every piece places the isosurface vertices on a
+// shared edge identically. The copies must agree within a tolerance, the
+// same rule for coordinates and values: 1e-4 of the mesh's mean edge length
+// for a position, and in any case 4 units of float rounding of the larger
+// magnitude; otherwise the pieces are refused, naming the node, both pieces
+// and both values to full precision.
 #pragma once
 
 #include <filesystem>
@@ -98,6 +104,7 @@ private:
     // Nodes held by several pieces, by id, with the position they take.
     std::vector<GlobalId> shared_nodes_;
     std::vector<float> shared_xyz_;
+    std::vector<float> shared_f_; // and the value it takes (of source.array)
     double spacing_ = 0;
     std::int64_t node_count_ = 0, tet_count_ = 0;
     std::uint64_t fingerprint_ = 0;
