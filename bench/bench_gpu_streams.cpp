@@ -226,11 +226,16 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: %s; N = %lld, %d domains, %zu of them (%s)\n", kProgram, info.description.c_str(),
                  static_cast<long long>(o.lattice), o.domains, domains.size(), o.spread ? "spread" : "first");
 
-    // Every kernel loaded before any timing: a kernel's first launch may
-    // wait for the whole device.
+    // Every kernel loaded before any timing (a kernel's first launch may
+    // wait for the whole device), on a small domain the surface crosses, as
+    // Job::prepare_gpu does.
     {
+        const tetiso::LatticePartition small(24, 1, tetiso::make_field(kField));
+        Task warm_up = task;
+        warm_up.partition = &small;
+        warm_up.reduce.max_error = job.max_error_spacings * small.spacing();
         const std::vector<tetiso::Device> one{tetiso::Device::cuda(0)};
-        run_threads(task, {domains.front()}, one);
+        run_threads(warm_up, {0}, one);
     }
 
     std::vector<Row> rows;
