@@ -82,6 +82,13 @@ def main():
         print("host time in CUDA calls over the window (all threads together):")
         for name, count, total in rows:
             print(f"  {total / 1e9:8.3f} s  {count:8d} calls  {total / count / 1e3:8.1f} us each  {name}")
+    if "GPU_METRICS" in have and "TARGET_INFO_GPU_METRICS" in have:
+        names = dict(db.execute("select distinct metricId, metricName from TARGET_INFO_GPU_METRICS").fetchall())
+        rows = db.execute("select metricId, avg(value) from GPU_METRICS where timestamp >= ? and timestamp <= ? "
+                          "group by metricId", (lo, last)).fetchall()
+        print("GPU metrics sampled over the window (mean):")
+        for metric, value in rows:
+            print(f"  {value:8.2f}  {names.get(metric, metric)}")
 
 
 if __name__ == "__main__":
