@@ -26,6 +26,13 @@ inline void check_launch(const char* kernel) { check(cudaGetLastError(), kernel)
 // Device memory held by this process's DeviceArrays, all devices together.
 inline std::atomic<std::size_t> bytes_held{0};
 
+// The stream of the CUDA Device whose call this thread runs, set as the call
+// starts (Device::State::use_device). An array belongs to one Device and is
+// used on its stream alone, so it grows in that stream's order, and the
+// other Devices of the GPU, driven by other threads, go on meanwhile.
+// Unset, growing waits for the whole device.
+inline thread_local cudaStream_t growth_stream = nullptr;
+
 // A device array that only grows, keeping its contents when it does: a run
 // of tasks allocates a few times at first and then never (no managed
 // memory: plain device allocations).
@@ -45,14 +52,30 @@ public:
 
     void resize(std::size_t n) {
         if (n > capacity_) {
-            // Work queued on any stream may still read or write the old
-            // buffer; growing is rare (the first tasks), so wait for it all.
-            check(cudaDeviceSynchronize(), "growing a device array");
             const std::size_t grown = n + n / 4; // the next task is often a little larger
             T* fresh = nullptr;
-            check(cudaMalloc(reinterpret_cast<void**>(&fresh), grown * sizeof(T)), "cudaMalloc (out of device memory?)");
-            if (size_ > 0) check(cudaMemcpy(fresh, data_, size_ * sizeof(T), cudaMemcpyDeviceToDevice), "cudaMemcpy");
-            check(cudaFree(data_), "cudaFree");
+            if (const cudaStream_t stream = growth_stream) {
+                // Work queued on the stream may still read or write the old
+                // buffer: it goes once that work is done.
+                check(cudaMallocAsync(reinterpret_cast<void**>(&fresh), grown * sizeof(T), stream),
+                      "cudaMallocAsync (out of device memory?)");
+                if (size_ > 0)
+                    check(cudaMemcpyAsync(fresh, data_, size_ * sizeof(T), cudaMemcpyDeviceToDevice, stream),
+                          "cudaMemcpyAsync");
+                if (data_ && !stream_ordered_) check(cudaStreamSynchronize(stream), "growing a device array");
+                if (data_) check(stream_ordered_ ? cudaFreeAsync(data_, stream) : cudaFree(data_), "freeing");
+                stream_ordered_ = true;
+            } else {
+                // Work queued on any stream may still read or write the old
+                // buffer; wait for it all.
+                check(cudaDeviceSynchronize(), "growing a device array");
+                check(cudaMalloc(reinterpret_cast<void**>(&fresh), grown * sizeof(T)),
+                      "cudaMalloc (out of device memory?)");
+                if (size_ > 0)
+                    check(cudaMemcpy(fresh, data_, size_ * sizeof(T), cudaMemcpyDeviceToDevice), "cudaMemcpy");
+                check(cudaFree(data_), "cudaFree");
+                stream_ordered_ = false;
+            }
             bytes_held += (grown - capacity_) * sizeof(T);
             data_ = fresh;
             capacity_ = grown;
@@ -64,6 +87,7 @@ public:
         std::swap(data_, other.data_);
         std::swap(size_, other.size_);
         std::swap(capacity_, other.capacity_);
+        std::swap(stream_ordered_, other.stream_ordered_);
     }
 
     std::size_t capacity_bytes() const { return capacity_ * sizeof(T); }
@@ -72,6 +96,7 @@ private:
     T* data_ = nullptr;
     std::size_t size_ = 0;
     std::size_t capacity_ = 0;
+    bool stream_ordered_ = false; // data_ from cudaMallocAsync, freed in a stream's order
 };
 
 constexpr int kBlock = 256;

@@ -65,6 +65,7 @@ Device::State::State(int device_index) : device(device_index) {
 
 Device::State::~State() {
     exec.reset();
+    if (cuda::growth_stream == stream) cuda::growth_stream = nullptr;
     if (stream) cudaStreamDestroy(stream);
 }
 

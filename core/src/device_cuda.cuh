@@ -73,7 +73,12 @@ struct Device::State {
     Piece reduce(const Piece& piece, const ReduceOptions& options, ReduceReport* report);
     Piece reduce(const DeviceSurface& surface, const ReduceOptions& options, ReduceReport* report);
 
-    void use_device() const { cuda::check(cudaSetDevice(device), "cudaSetDevice"); }
+    // Each call's first step on its thread: this device current, and this
+    // Device's arrays growing on its stream (cuda::growth_stream).
+    void use_device() const {
+        cuda::check(cudaSetDevice(device), "cudaSetDevice");
+        cuda::growth_stream = stream;
+    }
 };
 
 inline double seconds_since(std::chrono::steady_clock::time_point start) {

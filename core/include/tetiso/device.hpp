@@ -13,7 +13,9 @@
 // itself). A CUDA Device owns its stream and buffers, kept from one call to
 // the next (they only grow), so a run of domains allocates at its start and
 // then not again; it uses no managed memory. Copies of a Device share them:
-// one thread at a time may use a CUDA Device.
+// one thread at a time may use a CUDA Device. Several Devices of one GPU may
+// be used by as many threads at once (several domains in flight): each waits
+// for its own stream alone, its buffers growing in that stream's order.
 //
 // The host's thread count is the options' own (ExtractOptions::threads,
 // ReduceOptions::threads), since a reduction may be offered more threads as
