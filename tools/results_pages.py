@@ -615,10 +615,39 @@ def paper_reproduction(folder):
                           f"{x['triad_gb_s'] / t / res[min(res)]['triad_gb_s']:.2f}"] for t, x in sorted(res.items())]))
 
 
+def gpu_streams(folder):
+    """bench_gpu_streams: K Devices of one GPU against the host's cores."""
+    data, run = load(folder, "gpu_streams.json"), load(folder, "run.json")
+    sample = data["rows"][0]
+
+    def cpu_share(k):  # /usr/bin/time -v of that K run alone
+        log = folder / "raw" / f"k{k}_time.log"
+        found = re.search(r"Percent of CPU this job got: (\d+)%", log.read_text()) if log.exists() else None
+        return f"{int(found[1]):,} %" if found else ""
+
+    rows = []
+    for r in data["rows"]:
+        k = r["streams"]
+        gpu = k > 0
+        latency = r["warm_s"] * (k if gpu else 16) / data["count"]
+        rows.append([k if gpu else "CPU, 16 threads", f"{r['warm_s']:.2f}", f"{r['cold_s']:.2f}" if gpu else "",
+                     f"{r['domains_per_s']:.1f}", f"{r['raw_triangles_per_s'] / 1e6:.2f} M",
+                     f"{latency * 1e3:,.0f} ms" if latency < 1 else f"{latency:.2f} s",
+                     f"{r['buffer_bytes'] / 2**20:,.0f} MiB" if gpu else "",
+                     f"{r['device_used_bytes'] / 2**20:,.0f} MiB" if gpu else "", cpu_share(k) if gpu else ""])
+    gpus = [r for r in data["rows"] if r["streams"] > 0]
+    best = max(gpus, key=lambda r: r["raw_triangles_per_s"])
+    return dict(data=data, run=run, sample=sample, best=best, one=gpus[0],
+                cpu=next(r for r in data["rows"] if r["streams"] == 0),
+                streams=table(["K streams", "warm s", "cold s", "domains/s", "raw triangles/s", "per-task latency",
+                               "buffers held", "GPU memory used", "host CPU"], rows))
+
+
 PAGES = {
     "paper-reproduction": (paper_reproduction, "paper-reproduction", "paper-reproduction.md"),
     "hardware-comparison": (hardware_comparison, "hardware-comparison", "hardware-comparison/README.md"),
     "reduce-gpu": (reduce_gpu, "reduce-gpu", "reduce-gpu/README.md"),
+    "gpu-streams": (gpu_streams, "gpu-streams", "gpu-streams/README.md"),
     "extract-gpu": (extract_gpu, "extract-gpu", "extract-gpu/README.md"),
     "scale": (scale, "scale", "scale/README.md"),
     "fuzz": (fuzz, "fuzz", "fuzz/README.md"),
