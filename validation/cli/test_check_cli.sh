@@ -89,6 +89,13 @@ ok "a sphere against a torus exits 1" [ $? -eq 1 ]
 ok "the signatures' line" grep -qF "signatures: the components are 1 × (genus 0, 0 boundary loops), the reference's 1 × (genus 1, 0 boundary loops)" \
     "$work/stderr"
 
+# A surface through a whole layer of lattice nodes (every crossing at its
+# node) is clean as extracted, raw and reduced.
+"$tetiso" extract --lattice 5 --field x --level 2.5 -o "$work/plane.ply"
+expect 0 "a plane through lattice nodes, raw" -- "$tetiso" check --strict "$work/plane.ply"
+"$tetiso" run --lattice 5 --domains 8 --field x --level 2.5 --seam-rings 0 --quiet -o "$work/plane-reduced.ply"
+expect 0 "a plane through lattice nodes, reduced" -- "$tetiso" check --strict "$work/plane-reduced.ply"
+
 # Bad input is still status 2 with one line.
 expect 2 "--strict of a missing file" -- "$tetiso" check --strict "$work/nothing.ply"
 expect 2 "--strict against a missing file" -- "$tetiso" check --strict "$work/sphere.ply" --against "$work/nothing.ply"
