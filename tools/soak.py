@@ -220,6 +220,11 @@ def draw_job(seed, index, args):
     return job
 
 
+def relative(command):
+    """A command as run from the repository's root."""
+    return command.replace(str(ROOT) + "/", "")
+
+
 def run(command, timeout):
     return subprocess.run(command, capture_output=True, text=True, timeout=timeout)
 
@@ -230,7 +235,7 @@ def check_job(job, tetiso, work, timeout):
     for path in (out, raw):
         path.unlink(missing_ok=True)
     record = {k: job[k] for k in job if k not in ("command", "raw_command")}
-    record["reproduce"] = [shlex.join(job["command"] + ["-o", "out.ply"])]
+    record["reproduce"] = [relative(shlex.join(job["command"] + ["-o", "out.ply"]))]
     started = time.monotonic()
     try:
         done = run(job["command"] + ["-o", str(out)], timeout)
@@ -245,7 +250,7 @@ def check_job(job, tetiso, work, timeout):
         record["reproduce"].append("tetiso check --strict out.ply")
         if "raw_command" in job:
             done = run(job["raw_command"] + ["-o", str(raw)], timeout)
-            record["reproduce"].append(shlex.join(job["raw_command"] + ["-o", "raw.ply"]))
+            record["reproduce"].append(relative(shlex.join(job["raw_command"] + ["-o", "raw.ply"])))
             if done.returncode != 0:
                 violations.append("raw extraction failed: " + done.stderr.strip())
             else:
@@ -290,7 +295,9 @@ def main():
         sys.exit(f"soak: --tetiso {args.tetiso}: no such file")
     if args.max_lattice < 5:
         sys.exit("soak: --max-lattice must be at least 5")
-    os.environ.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    # Threads that wait passively: on a loaded machine spinning ones cost a
+    # job with two threads several times its time (no change to any surface).
+    os.environ.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMP_WAIT_POLICY="passive")
 
     started = time.time()
     records = []
@@ -315,9 +322,10 @@ def main():
         cpu = next((line.split(":", 1)[1].strip() for line in Path("/proc/cpuinfo").read_text().splitlines()
                     if line.startswith("model name")), platform.processor())
         Path(args.json).write_text(json.dumps({
-            "command": shlex.join(["tools/soak.py"] + sys.argv[1:]),
+            "command": relative(shlex.join(["tools/soak.py"] + sys.argv[1:])),
             "commit": commit, "started": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime(started)),
             "seconds": round(time.time() - started, 1), "machine": f"{cpu}, {os.cpu_count()} CPUs",
+            "tetiso": args.tetiso,
             "seed": args.seed, "jobs": len(records), "counts": counts, "records": records}, indent=1) + "\n")
     return 0 if counts.get("clean", 0) == len(records) else 1
 
