@@ -87,12 +87,14 @@ inline constexpr std::array<MarchCase, 16> kCases = build_cases();
 // would be written at the node's own position, or a few ulps off it, by every
 // edge through that node: vertices of different keys at one position,
 // zero-area triangles, and faces whose normals rounding chose. Reduction
-// merges such a cluster only where its vertices are free, and a locked one
-// (on an interface) may reach the output unreduced (`extract`, --no-reduce,
-// a seam's reduction that stops short of it). Kept this far off, the
-// crossings of the edges through one node are as many distinct points, each
-// on its own edge, each within its own tetrahedron: a small, resolved copy
-// of the node's link, which rounding moves by a small fraction of its size.
+// cannot be relied on to merge such a cluster: those normals refuse its
+// collapses (the paper's N = 500 surface kept one inside a domain), locked
+// vertices refuse them all, and `extract` and --no-reduce write it as it is.
+// Kept this far off, the crossings of the edges through one node are
+// distinct points (on a lattice, each moves in every coordinate its edge
+// runs in), each on its own edge, each within its own tetrahedron: a small,
+// resolved copy of the node's link, which rounding moves by a small fraction
+// of its size.
 // Only the edge's own data enter, so every domain holding the edge computes
 // the same bits; each step is IEEE arithmetic (a multiplication by a power of
 // two, one division), the same on the host and the device. An edge too short
