@@ -578,7 +578,10 @@ def soundness(folder):
 
     def dirty(c):
         return bool(c["self_intersections"] or c["zero_area_triangles"] or c["duplicate_positions"])
+    paper, paper_before = load(folder, "paper-d250-check.json"), load(folder.parent / "paper-reproduction",
+                                                                         "check-d250.json")
     return dict(
+        paper=paper, paper_before=paper_before, paper_summary=topology_summary(paper),
         triage=triage, triage_table=table(
             ["seed: job", "before the clearance: crossing pairs / zero-area / repeated positions", "after"],
             [[f"{t['seed']}: {t['index']}", defects(t["before"]), defects(t["after"])] for t in checked]),
