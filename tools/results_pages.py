@@ -643,6 +643,52 @@ def gpu_streams(folder):
                                "buffers held", "GPU memory used", "host CPU"], rows))
 
 
+def soundness(folder):
+    """tools/soak.py's campaigns: every campaign*.json of the folder."""
+    campaigns = [json.loads(p.read_text()) for p in sorted(folder.glob("campaign*.json"))]
+    records = [dict(r, seed=c["seed"]) for c in campaigns for r in c["records"]]
+    outcomes = Counter(r["outcome"] for r in records)
+    kinds = Counter((r["kind"], r["level_kind"]) for r in records)
+    sources = Counter("lattice" if "lattice" in r else r["mesh"] for r in records)
+    failed = [r for r in records if r["outcome"] != "clean"]
+    before = load(folder, "before-fix.json")
+    before_failed = [r for r in before["records"] if r["outcome"] != "clean"]
+    before_reduced = [r for r in before_failed if any(not v.startswith("raw: ") for v in r.get("violations", []))
+                      and "--no-reduce" not in r["kind"] and r["kind"] != "extract"]
+    triage = load(folder, "triage.json")
+    checked = [t for t in triage["failures"] if t["outcome"] == "violations"]
+
+    def defects(c):
+        return f"{c['self_intersections']} / {c['zero_area_triangles']} / {c['duplicate_positions']}"
+
+    def dirty(c):
+        return bool(c["self_intersections"] or c["zero_area_triangles"] or c["duplicate_positions"])
+    paper, paper_before = load(folder, "paper-d250-check.json"), load(folder.parent / "paper-reproduction",
+                                                                         "check-d250.json")
+    return dict(
+        paper=paper, paper_before=paper_before, paper_summary=topology_summary(paper),
+        triage=triage, triage_table=table(
+            ["seed: job", "before the clearance: crossing pairs / zero-area / repeated positions", "after"],
+            [[f"{t['seed']}: {t['index']}", defects(t["before"]), defects(t["after"])] for t in checked]),
+        triaged=len(checked), old_too=sum(dirty(t["before"]) for t in checked),
+        new_ones=" and ".join(f"{t['seed']}: {t['index']}" for t in checked if not dirty(t["before"])),
+        driver_errors=", ".join(f"{t['seed']}: {t['index']}" for t in triage["failures"] if t["outcome"] == "error"),
+        before=before, before_failed=len(before_failed), before_reduced=len(before_reduced),
+        before_examples=bullets(f"job {r['index']} (`{r['kind']}`): {r['violations'][0]}" for r in before_reduced[:3]),
+        jobs=len(records), clean=outcomes.get("clean", 0), failed=len(failed), campaigns=campaigns,
+        outcomes=", ".join(f"{n:,} {k}" for k, n in sorted(outcomes.items())),
+        kinds_table=table(["command", "level", "jobs"],
+                          [[f"`{k}`", lv, f"{n:,}"] for (k, lv), n in sorted(kinds.items())]),
+        sources=", ".join(f"{n:,} on {k}" for k, n in sorted(sources.items())),
+        largest=max((r.get("lattice", 0) for r in records), default=0),
+        failures_table=table(["seed: job", "command", "outcome", "what", "to reproduce"],
+                             [[f"{r['seed']}: {r['index']}", f"`{r['kind']}`", r["outcome"],
+                               "; ".join(r.get("violations", [])) or r.get("detail", ""),
+                               "<br>".join(f"`{c}`" for c in r["reproduce"])] for r in failed]) if failed else "",
+        provenance=bullets(f"`{c['command']}`: {c['jobs']:,} jobs in {c['seconds'] / 60:.1f} min; commit "
+                           f"{c['commit']}; started {c['started']}; {c['machine']}" for c in campaigns))
+
+
 PAGES = {
     "paper-reproduction": (paper_reproduction, "paper-reproduction", "paper-reproduction.md"),
     "hardware-comparison": (hardware_comparison, "hardware-comparison", "hardware-comparison/README.md"),
@@ -651,6 +697,7 @@ PAGES = {
     "extract-gpu": (extract_gpu, "extract-gpu", "extract-gpu/README.md"),
     "scale": (scale, "scale", "scale/README.md"),
     "fuzz": (fuzz, "fuzz", "fuzz/README.md"),
+    "soundness": (soundness, "soundness", "soundness/README.md"),
     "solver-read": (solver_read, "solver-read", "solver-read/README.md"),
     "mesh": (mesh, "mesh", "mesh/README.md"),
     "reduce": (reduce, "reduce", "reduce/README.md"),

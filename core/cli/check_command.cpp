@@ -1,5 +1,8 @@
 // `tetiso check`: is this surface sound? Topology, quality and, against a
-// reference, distance and per-component signatures, printed as JSON.
+// reference, distance and per-component signatures, printed as JSON; with
+// --strict, a gate for CI scripts: one line on stderr per clause of the
+// surface contract that the surface violates, and exit status 1.
+#include <cstdlib>
 #include <iostream>
 
 #include "commands.hpp"
@@ -9,32 +12,53 @@
 namespace tetiso::cli {
 namespace {
 
+// The exit status of a surface that violates the contract: 2 stays what it
+// is for every command, bad input.
+constexpr int kViolated = 1;
+
 struct CheckArguments {
     std::filesystem::path input;
     std::filesystem::path against;
     bool self_intersections = true;
     bool vertices_only = false;
+    bool strict = false;
 };
 
 void run_check(const CheckArguments& args) {
     const Piece surface = read_piece(args.input);
     const TopologyReport topology = check_topology(surface);
     nlohmann::json out = {{"file", args.input.string()}, {"topology", to_json(topology)}};
+    std::optional<std::vector<TrianglePair>> crossings;
     if (args.self_intersections && have_self_intersections()) {
-        const std::optional<std::size_t> crossings = count_self_intersections(surface);
-        out["self_intersections"] = crossings ? nlohmann::json(*crossings) : nlohmann::json(nullptr);
+        crossings = find_self_intersections(surface);
+        out["self_intersections"] = crossings ? nlohmann::json(crossings->size()) : nlohmann::json(nullptr);
+        if (crossings) out["topology"]["where"]["self_intersections"] = to_json(*crossings, surface);
     }
+    std::optional<TopologyReport> reference_topology;
     if (!args.against.empty()) {
         const Piece reference = read_piece(args.against);
-        const TopologyReport reference_topology = check_topology(reference);
+        reference_topology = check_topology(reference);
         out["against"] = {
             {"file", args.against.string()},
-            {"same_signatures", same_signatures(topology, reference_topology)},
-            {"reference_topology", to_json(reference_topology)},
+            {"same_signatures", same_signatures(topology, *reference_topology)},
+            {"reference_topology", to_json(*reference_topology)},
             {"hausdorff", to_json(hausdorff(surface, reference, HausdorffOptions{.vertices_only = args.vertices_only}))},
         };
     }
+    std::vector<std::string> violations;
+    if (args.strict) {
+        violations = contract_violations(surface, topology, crossings,
+                                         reference_topology ? &*reference_topology : nullptr);
+        if (args.self_intersections && !have_self_intersections())
+            violations.push_back("self-intersections: not checked, this tetiso was built without CGAL "
+                                 "(--no-self-intersections gates without them)");
+        out["violations"] = violations;
+    }
     std::cout << out.dump(2) << '\n';
+    if (violations.empty()) return;
+    for (const std::string& line : violations) std::cerr << "tetiso check: " << args.input.string() << ": " << line << '\n';
+    std::cout.flush();
+    std::exit(kViolated);
 }
 
 } // namespace
@@ -51,6 +75,10 @@ void add_check_command(CLI::App& app, Command& run) {
                   "vertices to REF, what reduce's --max-error bounds when IN is the input and REF the result)");
     cmd->add_flag("!--no-self-intersections", args->self_intersections,
                   "Skip the self-intersection count (CGAL builds only; slow on large surfaces)");
+    cmd->add_flag("--strict", args->strict,
+                  "A gate: exit 1, with one line on stderr per violated clause, unless the surface is clean "
+                  "(no degenerate triangle, duplicate position, self-intersection or duplicate triangle; "
+                  "manifold, consistently oriented; with --against, the reference's component signatures)");
     cmd->callback([&run, args] { run = [args] { run_check(*args); }; });
 }
 

@@ -80,22 +80,50 @@ constexpr std::array<MarchCase, 16> build_cases() {
 
 inline constexpr std::array<MarchCase, 16> kCases = build_cases();
 
+// How near one of its ends a crossing of edge (a, b) may lie, as a
+// parameter: kNodeClearanceUlps units in the last place of the edge's largest
+// coordinate (or of its extent, if that is larger), measured along the axis
+// it runs furthest in. A crossing nearer its node than float can tell apart
+// would be written at the node's own position, or a few ulps off it, by every
+// edge through that node: vertices of different keys at one position,
+// zero-area triangles, and faces whose normals rounding chose. Reduction
+// cannot be relied on to merge such a cluster: those normals refuse its
+// collapses (the paper's N = 500 surface kept one inside a domain), locked
+// vertices refuse them all, and `extract` and --no-reduce write it as it is.
+// Kept this far off, the crossings of the edges through one node are
+// distinct points (on a lattice, each moves in every coordinate its edge
+// runs in), each on its own edge, each within its own tetrahedron: a small,
+// resolved copy of the node's link, which rounding moves by a small fraction
+// of its size.
+// Only the edge's own data enter, so every domain holding the edge computes
+// the same bits; each step is IEEE arithmetic (a multiplication by a power of
+// two, one division), the same on the host and the device. An edge too short
+// for the clearance (under 4 × kNodeClearanceUlps ulps) keeps its crossings
+// in its middle half.
+constexpr float kNodeClearanceUlps = 32.0f;
+
+TETISO_HD inline float node_clearance(float ax, float ay, float az, float bx, float by, float bz) {
+    auto larger = [](float a, float b) { return a > b ? a : b; };
+    auto magnitude = [](float a) { return a < 0.0f ? -a : a; };
+    const float extent = larger(magnitude(bx - ax), larger(magnitude(by - ay), magnitude(bz - az)));
+    const float largest = larger(extent, larger(larger(larger(magnitude(ax), magnitude(bx)),
+                                                       larger(magnitude(ay), magnitude(by))),
+                                                larger(magnitude(az), magnitude(bz))));
+    constexpr float kMostClearance = 0.25f;
+    if (!(extent > 0.0f)) return kMostClearance;
+    // largest × 2^-23 is within a factor 2 above the ulp of `largest`.
+    const float clearance = kNodeClearanceUlps * 0x1p-23f * largest / extent;
+    return clearance < kMostClearance ? clearance : kMostClearance;
+}
+
 // Where the crossing of edge (a, b) lies, as the parameter from a, where a is
 // the end with the smaller global id (so that every domain holding the edge
-// computes the same bits): fa >= level > fb or the reverse.
-TETISO_HD inline float crossing_parameter(float fa, float fb, float level) {
-    float t = (level - fa) / (fb - fa);
-    t = t < 0.0f ? 0.0f : (t > 1.0f ? 1.0f : t);
-    // A crossing closer to a node than float resolves along its edge is the
-    // node itself. Interpolated from a node at coordinate 0 it would land a
-    // denormal-sized step off it instead (3e-16 on meshes/cube.1), so that
-    // the vertices of all edges through that node, which ought to coincide
-    // and be merged by the reducer's zero-length collapses, form a triangle
-    // too small for the float normal and not short against its own edges.
-    constexpr float kResolved = 0x1p-24f;
-    if (t < kResolved) t = 0.0f;
-    else if (t > 1.0f - kResolved) t = 1.0f;
-    return t;
+// computes the same bits): fa >= level > fb or the reverse. Kept within
+// [clearance, 1 - clearance] (node_clearance); monotone in the level.
+TETISO_HD inline float crossing_parameter(float fa, float fb, float level, float clearance) {
+    const float t = (level - fa) / (fb - fa);
+    const float highest = 1.0f - clearance;
+    return t < clearance ? clearance : (t > highest ? highest : t);
 }
 
 TETISO_HD inline float interpolate(float a, float b, float t) { return a + t * (b - a); }
@@ -167,7 +195,9 @@ TETISO_HD inline bool contains(const EdgeKey* sorted, std::size_t n, EdgeKey key
 TETISO_HD inline CrossingVertex place_crossing(const NodeView& node, std::size_t lo, std::size_t hi, float level) {
     const bool lo_first = node.gid[lo] < node.gid[hi];
     const std::size_t a = lo_first ? lo : hi, b = lo_first ? hi : lo;
-    const float t = crossing_parameter(node.f[a], node.f[b], level);
+    const float clearance =
+        node_clearance(node.x[a], node.y[a], node.z[a], node.x[b], node.y[b], node.z[b]);
+    const float t = crossing_parameter(node.f[a], node.f[b], level, clearance);
     CrossingVertex v;
     v.x = interpolate(node.x[a], node.x[b], t);
     v.y = interpolate(node.y[a], node.y[b], t);

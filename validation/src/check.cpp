@@ -35,6 +35,7 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <utility>
 #include <string>
 
 #include "tetiso/error.hpp"
@@ -211,7 +212,8 @@ std::vector<float> minimum_angles(const Piece& mesh, const std::vector<std::uint
 // Open addressing on the bit patterns: linear time, where sorting 96-bit
 // keys was a large part of the whole check. Equality is bitwise, as asked:
 // 0.0 and -0.0 differ, and a NaN would equal its own copy (none get here).
-std::int64_t count_duplicate_positions(const Piece& mesh) {
+// Returns each duplicate as (first vertex of its position, the duplicate).
+std::vector<std::pair<std::int32_t, std::int32_t>> find_duplicate_positions(const Piece& mesh) {
     const std::size_t nv = mesh.x.size();
     auto bits = [&mesh](std::size_t v) {
         return std::array<std::uint32_t, 3>{std::bit_cast<std::uint32_t>(mesh.x[v]), std::bit_cast<std::uint32_t>(mesh.y[v]),
@@ -219,7 +221,7 @@ std::int64_t count_duplicate_positions(const Piece& mesh) {
     };
     const std::size_t size = std::bit_ceil(2 * nv + 1);
     std::vector<std::int32_t> table(size, -1);
-    std::int64_t duplicates = 0;
+    std::vector<std::pair<std::int32_t, std::int32_t>> duplicates;
     for (std::size_t v = 0; v < nv; ++v) {
         const std::array<std::uint32_t, 3> b = bits(v);
         std::uint64_t h = (static_cast<std::uint64_t>(b[0]) << 32 | b[1]) * 0x9e3779b97f4a7c15ull;
@@ -230,7 +232,7 @@ std::int64_t count_duplicate_positions(const Piece& mesh) {
                 break;
             }
             if (bits(static_cast<std::size_t>(table[slot])) == b) {
-                ++duplicates;
+                duplicates.emplace_back(table[slot], static_cast<std::int32_t>(v));
                 break;
             }
         }
@@ -492,7 +494,18 @@ TopologyReport check_topology(const Piece& mesh, const CheckOptions& options) {
         std::nth_element(measured.begin(), nth, measured.end());
         s.p01 = *nth;
     }
-    r.duplicate_positions = count_duplicate_positions(mesh);
+    std::vector<std::pair<std::int32_t, std::int32_t>> duplicates = find_duplicate_positions(mesh);
+    r.duplicate_positions = static_cast<std::int64_t>(duplicates.size());
+    std::sort(duplicates.begin(), duplicates.end());
+    for (std::size_t i = 0; i < duplicates.size() && r.where.duplicate_positions.size() < kMaxProblemSpots;) {
+        const std::int32_t first = duplicates[i].first;
+        ProblemSpot& spot = r.where.duplicate_positions.emplace_back();
+        spot.vertices.push_back(first);
+        for (; i < duplicates.size() && duplicates[i].first == first; ++i)
+            if (spot.vertices.size() < kMaxProblemSpots) spot.vertices.push_back(duplicates[i].second);
+        spot.at = {mesh.x[static_cast<std::size_t>(first)], mesh.y[static_cast<std::size_t>(first)],
+                   mesh.z[static_cast<std::size_t>(first)]};
+    }
     return r;
 }
 
@@ -538,6 +551,7 @@ nlohmann::json to_json(const TopologyReport& r) {
         return out;
     };
     const json where = {{"degenerate_triangles", spots(r.where.degenerate_triangles)},
+                        {"duplicate_positions", spots(r.where.duplicate_positions)},
                         {"non_manifold_edges", spots(r.where.non_manifold_edges)},
                         {"non_manifold_vertices", spots(r.where.non_manifold_vertices)},
                         {"misoriented_edges", spots(r.where.misoriented_edges)}};

@@ -21,6 +21,7 @@
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Surface_mesh.h>
 
+#include <algorithm>
 #include <array>
 #include <iterator>
 #include <utility>
@@ -37,6 +38,12 @@ bool have_self_intersections() {
 }
 
 std::optional<std::size_t> count_self_intersections(const Piece& mesh) {
+    const std::optional<std::vector<TrianglePair>> pairs = find_self_intersections(mesh);
+    if (!pairs) return std::nullopt;
+    return pairs->size();
+}
+
+std::optional<std::vector<TrianglePair>> find_self_intersections(const Piece& mesh) {
     validate_indexed_mesh(mesh, "self-intersections");
 #if defined(TETISO_HAVE_CGAL)
     namespace PMP = CGAL::Polygon_mesh_processing;
@@ -50,9 +57,11 @@ std::optional<std::size_t> count_self_intersections(const Piece& mesh) {
     std::vector<std::size_t> renumber(nv, nv);
     std::vector<Point> points;
     std::vector<std::array<std::size_t, 3>> triangles;
+    std::vector<std::int64_t> original; // the mesh's index of each triangle that goes in
     for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
         const std::int32_t* v = &mesh.triangles[3 * t];
         if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
+        original.push_back(static_cast<std::int64_t>(t));
         std::array<std::size_t, 3> f{};
         for (int c = 0; c < 3; ++c) {
             if (renumber[v[c]] == nv) {
@@ -63,7 +72,7 @@ std::optional<std::size_t> count_self_intersections(const Piece& mesh) {
         }
         triangles.push_back(f);
     }
-    if (triangles.empty()) return std::size_t{0};
+    if (triangles.empty()) return std::vector<TrianglePair>{};
 
     const std::size_t points_before = points.size();
     if (!PMP::orient_polygon_soup(points, triangles) || points.size() != points_before) return std::nullopt;
@@ -75,9 +84,17 @@ std::optional<std::size_t> count_self_intersections(const Piece& mesh) {
     PMP::self_intersections(surface, std::back_inserter(pairs));
     // A degenerate face is reported paired with itself; it is not an
     // intersection of two triangles, and check_topology already counts it.
-    std::size_t count = 0;
-    for (const auto& [f, g] : pairs) count += f != g;
-    return count;
+    // Faces are numbered in the order the soup listed them, so a face's index
+    // is its place in `original`.
+    std::vector<TrianglePair> found;
+    for (const auto& [f, g] : pairs) {
+        if (f == g) continue;
+        const std::int64_t a = original[static_cast<std::size_t>(f.idx())];
+        const std::int64_t b = original[static_cast<std::size_t>(g.idx())];
+        found.push_back({std::min(a, b), std::max(a, b)});
+    }
+    std::sort(found.begin(), found.end());
+    return found;
 #else
     return std::nullopt;
 #endif

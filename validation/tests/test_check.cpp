@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -380,6 +381,23 @@ TEST(CheckTopology, DuplicatePositionsAreBitIdentical) {
     EXPECT_EQ(r.non_manifold_vertices, 1);
 }
 
+TEST(CheckTopology, DuplicatePositionsAreLocatedByGroup) {
+    // Vertices 0, 3 and 5 share one position, 1 and 4 another: two groups,
+    // in the order of their first vertex, each listing its vertices.
+    const Piece m = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {1, 0, 0}, {0, 0, 0}, {2, 2, 2}},
+                              {{0, 1, 2}, {3, 4, 6}, {5, 2, 6}});
+    const tetiso::TopologyReport r = tetiso::check_topology(m);
+    EXPECT_EQ(r.duplicate_positions, 3);
+    ASSERT_EQ(r.where.duplicate_positions.size(), 2u);
+    EXPECT_EQ(r.where.duplicate_positions[0].vertices, (std::vector<std::int32_t>{0, 3, 5}));
+    EXPECT_EQ(r.where.duplicate_positions[0].at, (std::array<double, 3>{0, 0, 0}));
+    EXPECT_EQ(r.where.duplicate_positions[1].vertices, (std::vector<std::int32_t>{1, 4}));
+    EXPECT_EQ(r.where.duplicate_positions[1].at, (std::array<double, 3>{1, 0, 0}));
+    const nlohmann::json j = tetiso::to_json(r);
+    EXPECT_EQ(j["where"]["duplicate_positions"].size(), 2u);
+    EXPECT_EQ(j["where"]["duplicate_positions"][0]["vertices"], nlohmann::json({0, 3, 5}));
+}
+
 TEST(CheckTopology, DuplicateTriangles) {
     const Piece m = make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}, {1, 2, 0}, {2, 1, 0}});
     const tetiso::TopologyReport r = tetiso::check_topology(m);
@@ -587,9 +605,80 @@ TEST(SelfIntersections, CountsCrossingPairsOnly) {
     EXPECT_EQ(tetiso::count_self_intersections(mobius(12)), std::nullopt);
 }
 
+TEST(SelfIntersections, PairsNameTheMeshsOwnTriangles) {
+    if (!tetiso::have_self_intersections()) GTEST_SKIP() << "built without CGAL";
+    // A collapsed triangle first (left out of CGAL's mesh) and a clean one
+    // apart: the crossing pair is still named by the mesh's indices, 1 and 3.
+    const Piece cross = make_mesh({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, -1}, {0.5f, 0.5f, 1}, {3, 3, 0.5f},
+                                   {9, 9, 9}, {10, 9, 9}, {9, 10, 9}},
+                                  {{0, 0, 1}, {0, 1, 2}, {6, 7, 8}, {3, 4, 5}});
+    const auto pairs = tetiso::find_self_intersections(cross);
+    ASSERT_TRUE(pairs.has_value());
+    EXPECT_EQ(*pairs, (std::vector<tetiso::TrianglePair>{{1, 3}}));
+    const nlohmann::json j = tetiso::to_json(*pairs, cross);
+    EXPECT_EQ(j[0]["triangles"], nlohmann::json({1, 3}));
+    EXPECT_NEAR(j[0]["at"][0].get<double>(), 2.0 / 3.0, 1e-6);
+    EXPECT_EQ(tetiso::find_self_intersections(mobius(12)), std::nullopt);
+}
+
 TEST(SelfIntersections, WithoutCgalTheAnswerIsEmpty) {
     if (tetiso::have_self_intersections()) GTEST_SKIP() << "built with CGAL";
     EXPECT_EQ(tetiso::count_self_intersections(tetrahedron()), std::nullopt);
+}
+
+// ------------------------------------------------------------------ contract
+
+// The clause lines of a mesh, by their leading words.
+std::vector<std::string> clauses(const Piece& m, const tetiso::TopologyReport* reference = nullptr) {
+    const auto crossings =
+        tetiso::have_self_intersections() ? tetiso::find_self_intersections(m) : std::nullopt;
+    std::vector<std::string> out;
+    for (const std::string& line : tetiso::contract_violations(m, tetiso::check_topology(m), crossings, reference))
+        out.push_back(line.substr(0, line.find(':')));
+    return out;
+}
+
+TEST(Contract, CleanSurfacesPass) {
+    EXPECT_TRUE(clauses(tetrahedron()).empty());
+    EXPECT_TRUE(clauses(torus(20, 8)).empty());
+    EXPECT_TRUE(clauses(fan(6)).empty()); // a boundary is no violation
+    const tetiso::TopologyReport itself = tetiso::check_topology(torus(20, 8));
+    EXPECT_TRUE(clauses(torus(20, 8), &itself).empty());
+}
+
+TEST(Contract, EachViolatedClauseIsOneLine) {
+    using Lines = std::vector<std::string>;
+    // Zero area: three collinear corners.
+    EXPECT_EQ(clauses(make_mesh({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}, {{0, 1, 2}})), Lines{"degenerate triangles"});
+    // Two vertices at one position (two triangles meeting there would also
+    // intersect: the second is left unreferenced).
+    EXPECT_EQ(clauses(make_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}}, {{0, 1, 2}})),
+              Lines{"duplicate positions"});
+    EXPECT_EQ(clauses(make_mesh({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}}, {{0, 1, 2}, {0, 3, 4}})),
+              Lines{"non-manifold"});
+    Piece flipped = tetrahedron();
+    std::swap(flipped.triangles[10], flipped.triangles[11]);
+    EXPECT_EQ(clauses(flipped), Lines{"orientation"});
+    const tetiso::TopologyReport sphere = tetiso::check_topology(tetrahedron());
+    EXPECT_EQ(clauses(torus(20, 8), &sphere), Lines{"signatures"});
+    if (tetiso::have_self_intersections()) {
+        const Piece cross = make_mesh({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {0.5f, 0.5f, -1}, {0.5f, 0.5f, 1}, {3, 3, 0.5f}},
+                                      {{0, 1, 2}, {3, 4, 5}});
+        EXPECT_EQ(clauses(cross), Lines{"self-intersections"});
+    }
+}
+
+TEST(Contract, LinesNameTheCountsAndTheFirstPlace) {
+    const Piece m = make_mesh({{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}}, {{0, 1, 3}, {1, 0, 2}});
+    const std::vector<std::string> lines = tetiso::contract_violations(m, tetiso::check_topology(m), std::nullopt);
+    ASSERT_EQ(lines.size(), 1u);
+    EXPECT_EQ(lines[0], "degenerate triangles: 1 (0 collapsed, 1 of zero area); the first is triangle 1 at (1, 0, 0)");
+    const tetiso::TopologyReport sphere = tetiso::check_topology(tetrahedron());
+    const std::vector<std::string> signature =
+        tetiso::contract_violations(torus(20, 8), tetiso::check_topology(torus(20, 8)), std::nullopt, &sphere);
+    ASSERT_EQ(signature.size(), 1u);
+    EXPECT_EQ(signature[0], "signatures: the components are 1 × (genus 1, 0 boundary loops), the reference's "
+                            "1 × (genus 0, 0 boundary loops)");
 }
 
 } // namespace

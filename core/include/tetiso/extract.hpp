@@ -8,7 +8,15 @@
 //  - triangle orientation follows from the field alone: normals point towards
 //    increasing values;
 //  - each vertex is keyed by its global edge id and locked when its edge lies
-//    on an interface of the domain.
+//    on an interface of the domain;
+//  - a crossing keeps clear of its edge's ends by a few dozen ulps of the
+//    edge's coordinates (extract_rules.hpp, node_clearance), so that the
+//    crossings of the edges through a node at or near the level never share
+//    a float position.
+// Contract (docs/ARCHITECTURE.md, "Contracts"): the piece, and any union of
+// pieces merged by key, is clean as written in float32: no zero-area
+// triangle, no two vertices at one position, no self-intersection, an
+// oriented manifold (`tetiso check --strict`).
 #pragma once
 
 #include "tetiso/device.hpp"

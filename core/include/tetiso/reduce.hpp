@@ -16,6 +16,10 @@
 // topology allows), vertices flagged kLocked keep their position bit for bit
 // and are never removed, border vertices stay on the border, vertex keys stay
 // sorted and unique. The output does not depend on the thread count.
+// Contract (docs/ARCHITECTURE.md, "Contracts"): given a surface clean as
+// written in float32 (extract.hpp), the result is clean as written too: no
+// zero-area triangle, no two vertices at one position, no self-intersection;
+// legality is judged on the float positions that will be written.
 #pragma once
 
 #include <cstddef>

@@ -2,6 +2,10 @@
 // and seaming"): two pieces get one numbering by merging their key-sorted
 // vertex lists; no coordinates are compared. A vertex keyed by the same edge
 // in both pieces becomes one vertex.
+// Contract (docs/ARCHITECTURE.md, "Contracts"): pieces that are clean as
+// written (extract.hpp, reduce.hpp) seam and reduce into a surface that is
+// clean as written too, with each component's signature that of the
+// unreduced surface.
 #pragma once
 
 #include <functional>

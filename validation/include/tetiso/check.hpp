@@ -14,8 +14,10 @@
 //   hausdorff       symmetric Hausdorff distance estimated from dense
 //                   deterministic samples with exact point-to-triangle
 //                   distances (hausdorff.cpp; a BVH on flat arrays)
-//   count_self_intersections  optional, through CGAL
+//   find_self_intersections  optional, through CGAL
 //                   (self_intersections_cgal.cpp)
+//   contract_violations  the surface contract as a gate, one line per
+//                   violated clause (contract.cpp)
 //
 // Only the triangles and x, y, z of a Piece are read; keys, flags and domains
 // are ignored, so meshes built by hand in tests need not fill them.
@@ -26,6 +28,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -109,6 +112,9 @@ struct ProblemSpot {
 inline constexpr std::size_t kMaxProblemSpots = 8;
 struct ProblemSpots {
     std::vector<ProblemSpot> degenerate_triangles; // collapsed or zero area
+    // Vertices of one position: the group's first kMaxProblemSpots vertices
+    // in index order, the groups in the order of their first vertex.
+    std::vector<ProblemSpot> duplicate_positions;
     std::vector<ProblemSpot> non_manifold_edges;
     std::vector<ProblemSpot> non_manifold_vertices;
     std::vector<ProblemSpot> misoriented_edges;
@@ -214,15 +220,43 @@ HausdorffReport hausdorff(const Piece& a, const Piece& b, const HausdorffOptions
 nlohmann::json to_json(const TopologyReport& report);
 nlohmann::json to_json(const HausdorffReport& report);
 
-// Number of pairs of triangles that intersect other than in a shared vertex
-// or edge, from CGAL::Polygon_mesh_processing::self_intersections. nullopt
-// when tetiso was built without CGAL, or when the mesh cannot be made a CGAL
-// surface mesh without splitting it (non-manifold or non-orientable, which
-// check_topology reports). Collapsed triangles are ignored; zero-area ones
-// are not counted as intersecting.
+// Two triangles of a mesh, by index, first < second.
+struct TrianglePair {
+    std::int64_t first = 0;
+    std::int64_t second = 0;
+    auto operator<=>(const TrianglePair&) const = default;
+};
+
+// The pairs of triangles that intersect other than in a shared vertex or
+// edge, sorted, from CGAL::Polygon_mesh_processing::self_intersections.
+// nullopt when tetiso was built without CGAL, or when the mesh cannot be made
+// a CGAL surface mesh without splitting it (non-manifold or non-orientable,
+// which check_topology reports). Collapsed triangles are ignored; zero-area
+// ones are not counted as intersecting.
+std::optional<std::vector<TrianglePair>> find_self_intersections(const Piece& mesh);
+
+// How many pairs find_self_intersections finds.
 std::optional<std::size_t> count_self_intersections(const Piece& mesh);
 
 // Whether count_self_intersections can ever answer (tetiso built with CGAL).
 bool have_self_intersections();
+
+// The surface contract that every surface tetiso writes keeps
+// (docs/ARCHITECTURE.md, "Contracts"), as a gate: one line per violated
+// clause, naming the count and where the first instance is — degenerate
+// triangles (collapsed or of zero float area), duplicate positions,
+// self-intersections (when measured: nullopt adds no line), duplicate
+// triangles, non-manifold edges or vertices, misoriented edges or
+// non-orientable components, and, given a reference (the unreduced surface),
+// component signatures that differ from its. Empty when the surface is
+// clean. contract.cpp.
+std::vector<std::string> contract_violations(const Piece& mesh, const TopologyReport& report,
+                                             const std::optional<std::vector<TrianglePair>>& self_intersections,
+                                             const TopologyReport* reference = nullptr);
+
+// The first kMaxProblemSpots pairs as {"triangles": [a, b], "at": a's centroid}.
+nlohmann::json to_json(const std::vector<TrianglePair>& pairs, const Piece& mesh);
+
+std::array<double, 3> triangle_centroid(const Piece& mesh, std::int64_t triangle);
 
 } // namespace tetiso
