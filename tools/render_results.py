@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """Renders the results pages from their data: results/NAME/page.md (the prose,
 written by hand) with its placeholders filled from the folder's JSON files by
-NAME's spec in tools/results_pages.py (which data, which tables and plots,
-which derived figures).
+NAME's spec in tools/results_pages.py, or results_pages_gpu.py for the GPU
+pages (which data, which tables and plots, which derived figures).
 
     tools/render_results.py [--results DIR] [NAME...]
         NAME: a page (default: every page); DIR: a results folder other than
@@ -16,6 +16,7 @@ python3 with python3-matplotlib (for the plots).
 """
 import json
 import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -109,6 +110,12 @@ def topology_summary(check):
             f"{', closed' if t.get('closed') else ''}; non-manifold {t['non_manifold_edges']} / "
             f"{t['non_manifold_vertices']}, misoriented {t['misoriented_edges']}, degenerate "
             f"{t['degenerate_triangles']}, duplicate positions {t['duplicate_positions']}")
+
+
+def plot_timeline(report, png):
+    """scripts/plot_timeline.py, the users' own, draws a job's timeline."""
+    script = Path(__file__).resolve().parent.parent / "scripts" / "plot_timeline.py"
+    subprocess.run([sys.executable, str(script), str(report), "-o", str(png)], check=True)
 
 
 def figure(width, height):

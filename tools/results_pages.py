@@ -2,29 +2,18 @@
 its folder it reads, the tables and plots it makes, the derived figures its
 page.md names. Each spec takes the folder and returns the names the page's
 placeholders use; the prose is in the page.md."""
-import gzip
 import json
 import re
 import statistics
-import subprocess
-import sys
 from collections import Counter
-from pathlib import Path
 
-from render_results import (bench_provenance, bullets, figure, load, load_aggregates, runs_provenance, save, table,
-                            topology_summary)
-
-TOOLS = Path(__file__).resolve().parent
+from render_results import (bench_provenance, bullets, figure, load, load_aggregates, plot_timeline, runs_provenance,
+                            save, table, topology_summary)
+from results_pages_gpu import gpu_streams, hardware_comparison, reduce_gpu
 
 
 def mega(value):
     return f"{value / 1e6:.2f}"
-
-
-def plot_timeline(report, png):
-    """scripts/plot_timeline.py, the users' own, draws a job's timeline."""
-    script = TOOLS.parent / "scripts" / "plot_timeline.py"
-    subprocess.run([sys.executable, str(script), str(report), "-o", str(png)], check=True)
 
 
 def extract(folder):
@@ -252,202 +241,6 @@ def scale(folder):
 # vertex), the operations' kind, priority, position, bound and survivor (per
 # edge), the order and reservations of the selection, and the compacted
 # surface written once each. About 1.5 edges and 0.5 vertices a triangle.
-BYTES_PER_TRIANGLE_ROUND = 12 + 6 + 36 + 18 + 32 + 8 + 37 + 12 + 24 + 16
-READS_BACK = ("get", "count", "exclusive_scan", "filter", "rank", "copy_if")  # wait for the device
-LAUNCHES = ("for_each", "for_each_of", "assign", "set")
-
-
-def reduce_gpu(folder, n=100):
-    meta = load(folder, "meta.json")
-    pattern = (r"^(reduce/(?P<who>gpu|tetiso|meshopt)/N:(?P<n>\d+)(/threads:(?P<threads>\d+))?|domain/(?P<dwho>gpu|"
-               r"tetiso)/N:(?P<dn>\d+)/D:(?P<dd>\d+)|copy/gpu)(/repeats:\d+)?(/manual_time|/real_time)?$")
-    _, cases = load_aggregates(folder / "bench_reduce_gpu.json", pattern, lambda m: (
-        ("reduce", m["who"], int(m["n"]), int(m["threads"] or 0)) if m["who"] else
-        ("domain", m["dwho"], int(m["dn"]), int(m["dd"])) if m["dwho"] else ("copy", "gpu", 0, 0)))
-    rounds = load(folder, "rounds_n100.json")["rounds"]
-    gpu = cases["reduce", "gpu", n, 0]
-    gpu_s, tris_in = gpu["time_ms"] / 1e3, gpu["median"]["triangles_in"]
-    threads = max(k[3] for k in cases if k[:3] == ("reduce", "tetiso", n))
-    dkey = next(k for k in cases if k[:2] == ("domain", "gpu"))
-    dgpu, dcpu = cases[dkey], cases[("domain", "tetiso") + dkey[2:]]
-
-    def ms(seconds):
-        return f"{seconds * 1e3:,.1f}" if seconds < 10 else f"{seconds * 1e3:,.0f}"
-
-    def row(label, where, c, base, rate=True):  # base: the GPU's case it is compared with
-        s = c["time_ms"] / 1e3
-        return ([label, where, ms(s), ms(c["min_ms"] / 1e3)] + ([f"{tris_in / s / 1e6:.2f}"] if rate else [])
-                + ["1.00×" if c is base else f"{s / (base['time_ms'] / 1e3):.1f}×"])
-
-    profile = (folder / "profile_n100.txt").read_text()
-    sites = [(float(ms_), int(calls), f"{what} at {where}") for ms_, calls, what, where in
-             re.findall(r"^\s+([\d.]+) ms\s+(\d+) calls\s+(\S+) (\S+)$", profile, re.MULTILINE)]
-    bandwidth = cases["copy", "gpu", 0, 0]["median"]["GB/s"] * 1e9
-    triangle_rounds = sum(r["triangles"] for r in rounds)
-    tail = sorted(r["seconds"] for r in rounds if r["candidates"] < 5000)  # rounds with almost nothing to test
-
-    fig, ax = figure(7, 3.6)
-    xs = [r["round"] for r in rounds]
-    ax.bar(xs, [r["seconds"] * 1e3 for r in rounds], color="#3b6ea5")
-    ax.set_xlabel("round")
-    ax.set_ylabel("ms on the GPU")
-    ax2 = ax.twinx()
-    ax2.plot(xs, [r["triangles"] / 1e6 for r in rounds], color="#c0504d", marker=".")
-    ax2.set_ylabel("triangles at the round's start (M)", color="#c0504d")
-    ax.set_title(f"N = {n} paper surface on {meta['gpu'].split(',')[0]}: time and size per round")
-    save(fig, folder / "rounds.png")
-    return dict(
-        meta=meta, n=n, gpu=gpu, gpu_s=gpu_s, tris_in=tris_in, rounds=rounds, ms=ms, target_s=tris_in / 50e6,
-        dkey=dkey, dgpu=dgpu, dgpu_s=dgpu["time_ms"] / 1e3, bandwidth=bandwidth, triangle_rounds=triangle_rounds,
-        bytes_per_triangle=BYTES_PER_TRIANGLE_ROUND, floor_bytes=triangle_rounds * BYTES_PER_TRIANGLE_ROUND,
-        floor_s=triangle_rounds * BYTES_PER_TRIANGLE_ROUND / bandwidth, fixed=tail[len(tail) // 2],
-        reads=sum(c for _, c, site in sites if site.split(" ")[0] in READS_BACK) / len(rounds),
-        launches=sum(c for _, c, site in sites if site.split(" ")[0] in LAUNCHES) / len(rounds),
-        sorts=sum(t for t, _, site in sites if site.startswith(("order_by_priority", "group_by_key"))),
-        profile_s=float(re.search(r"tetiso GPU profile: ([\d.]+) s", profile).group(1)),
-        reduction=table(["", "where", "median ms", "fastest ms", "M input triangles/s", "time / GPU's"],
-                        [row("tetiso, GPU", "1 GPU", gpu, gpu),
-                         row("tetiso, CPU", "1 thread", cases["reduce", "tetiso", n, 1], gpu),
-                         row("tetiso, CPU", f"{threads} threads", cases["reduce", "tetiso", n, threads], gpu),
-                         row("meshoptimizer (no topology kept)", "1 thread", cases["reduce", "meshopt", n, 1], gpu)]),
-        domain=table(["", "where", "median ms", "fastest ms", "time / GPU's"],
-                     [row("tetiso, GPU", "1 GPU", dgpu, dgpu, False), row("tetiso, CPU", "1 core", dcpu, dgpu, False)]),
-        heaviest=table(["ms", "calls", "primitive at"], [[f"{t:.1f}", c, f"`{site}`"] for t, c, site in sites[:10]]),
-        shown=lambda command: re.sub(r"/\S*/(?=[a-z_0-9]+\.json)", "OUT/", command),
-        **reduce_gpu_before_after(folder, n))
-
-
-NCU_UNITS = {"byte": 1, "Kbyte": 1e3, "Mbyte": 1e6, "Gbyte": 1e9, "ns": 1e-6, "us": 1e-3, "ms": 1, "s": 1e3}
-
-
-def ncu_kernels(path):
-    """The kernels of an Nsight Compute log with the metrics the page compares:
-    a short name, the grid, ms, active threads a warp, local-memory bytes
-    loaded and stored, DRAM bytes."""
-    kernels = []
-    for block in re.split(r"\n(?=  void )", path.read_text())[1:]:
-        head = block.splitlines()[0]
-        template = re.match(r"  void (?:\w+::)*(\w+)<", head)
-        instance = re.search(r"\[lambda\(long\) \(instance (\d+)\)\]", head)
-        grid = re.search(r"\((\d+), 1, 1\)x\(", head)
-        metric = {name: float(value.replace(",", "")) * NCU_UNITS[unit] for name, unit, value in
-                  re.findall(r"^\s+(\S+)\s+(byte|Kbyte|Mbyte|Gbyte|ns|us|ms|s)\s+([\d.,]+)$", block, re.MULTILINE)}
-        ratio = re.search(r"smsp__thread_inst_executed_per_inst_executed\.ratio\s+([\d.]+)", block)
-        kernels.append(dict(
-            name=f"{template[1] if template else '?'}" + (f", lambda {instance[1]}" if instance else ""),
-            grid=int(grid[1]) if grid else 0, ms=metric["gpu__time_duration.sum"],
-            threads=float(ratio[1]), local_ld=metric["l1tex__t_bytes_pipe_lsu_mem_local_op_ld.sum"],
-            local_st=metric["l1tex__t_bytes_pipe_lsu_mem_local_op_st.sum"], dram=metric["dram__bytes.sum"]))
-    return kernels
-
-
-def ncu_table(kernels):
-    def gb(value):
-        return "none" if value == 0 else f"{value / 1e9:.2f}"
-    return table(["kernel", "blocks", "ms", "active threads a warp", "local loads GB", "local stores GB", "DRAM GB"],
-                 [[f"`{k['name']}`", f"{k['grid']:,}", f"{k['ms']:.2f}", f"{k['threads']:.2f}", gb(k["local_ld"]),
-                   gb(k["local_st"]), gb(k["dram"])] for k in kernels])
-
-
-def reduce_gpu_before_after(folder, n):
-    """The commit of the page against the baseline in baseline-*/: the same
-    benchmark cases, the fixed cost of a small round, the dry runs' profile."""
-    base = next(folder.glob("baseline-*"))
-    pattern = r"^(reduce/gpu/N:(\d+)|domain/gpu/N:(\d+)/D:(\d+))(/repeats:\d+)?(/manual_time|/real_time)?$"
-
-    def cases(f):
-        return load_aggregates(f / "bench_reduce_gpu.json", pattern, lambda m: m[1])[1]
-
-    def fixed(f):
-        tail = sorted(r["seconds"] for r in load(f, "rounds_n100.json")["rounds"] if r["candidates"] < 5000)
-        return tail[len(tail) // 2]
-
-    now, before = cases(folder), cases(base)
-    rows = [[f"`{name}`, median ms", f"{before[name]['time_ms']:.1f}", f"{now[name]['time_ms']:.1f}",
-             f"{now[name]['time_ms'] / before[name]['time_ms']:.2f}"] for name in sorted(now) if name in before]
-    rows.append(["a round with < 5,000 candidates (median), ms", f"{fixed(base) * 1e3:.2f}",
-                 f"{fixed(folder) * 1e3:.2f}", f"{fixed(folder) / fixed(base):.2f}"])
-    return dict(baseline=base.name, baseline_commit=base.name.split("-", 1)[1], fixed_before=fixed(base),
-                before_after=table(["", base.name.split("-", 1)[1], "this page", "ratio"], rows),
-                ncu_before=ncu_table(ncu_kernels(base / "ncu_dry_run.txt")),
-                ncu_after=ncu_table(ncu_kernels(folder / "ncu_dry_run.txt")))
-
-
-HARDWARE_TARGETS = {(500, 125): "≤ 2 s with auto, and auto ≥ 10× cpu (one GPU, 16 cores)",
-                    (1000, 1000): "≤ 15 s with auto on two GPUs (`nvidia-h100-x2`)"}
-
-
-def by_device(report):
-    """Per device: tasks, domain task seconds, busy seconds, raw triangles of
-    its domain tasks, waits for a grant, summed stage seconds of its domain tasks."""
-    rows = {}
-    for t in report["tasks"]:
-        r = rows.setdefault(t["device"], {"tasks": 0, "domains": [], "busy": 0.0, "triangles": 0, "waits": [],
-                                          "stages": Counter()})
-        r["tasks"] += 1
-        r["busy"] += t["end"] - t["start"]
-        r["waits"].append(t.get("wait_seconds", 0.0))
-        if t["kind"] == "domain":
-            r["domains"].append(t["end"] - t["start"])
-            r["triangles"] += t["triangles_in"]
-            r["stages"].update(t.get("stage_seconds", {}))
-    return sorted(rows.items())
-
-
-def hardware_comparison(folder):
-    meta = load(folder, "meta.json")
-    cases = {}
-    for path in folder.glob("n*-d*-cpu.json.gz"):
-        stem = path.name[: -len("-cpu.json.gz")]
-        n, d = (int(part[1:]) for part in stem.split("-"))
-        cases[n, d] = ({mode: json.loads(gzip.decompress((folder / f"{stem}-{mode}.json.gz").read_bytes()))
-                        for mode in ("cpu", "auto")}, (folder / f"{stem}-cmp.txt").read_text().strip())
-    cases = dict(sorted(cases.items(), key=lambda kv: (kv[0][0], -kv[0][1])))
-    job = {(nd, mode): runs[mode]["seconds"]["job"] for nd, (runs, _) in cases.items() for mode in runs}
-    split, stages = [], []
-    for (n, d), (runs, _) in cases.items():
-        for device, r in by_device(runs["auto"]):
-            split.append([f"{n} / {d}", device, r["tasks"], len(r["domains"]), f"{r['busy']:.1f}",
-                          f"{100 * r['busy'] / job[(n, d), 'auto']:.0f}%" if device != "cpu" else "",
-                          f"{r['triangles'] / 1e6:.1f} M", f"{statistics.median(r['domains']):.3f}",
-                          f"{statistics.mean(r['waits']):.2f}"])
-        for mode in ("cpu", "auto"):
-            seams = sum(t["end"] - t["start"] for t in runs[mode]["tasks"] if t["kind"] == "seam")
-            for device, r in by_device(runs[mode]):
-                rate = [f"{r['triangles'] / r['stages'][s] / 1e6:.1f}" if r["stages"][s] else "—"
-                        for s in ("generate", "extract", "reduce")]
-                stages.append([f"{n} / {d}", mode, device, *rate, f"{seams:.1f}"])
-
-    fig, ax = figure(7, 3.8)
-    x = range(len(cases))
-    cpu, auto = [job[nd, "cpu"] for nd in cases], [job[nd, "auto"] for nd in cases]
-    ax.bar([i - 0.2 for i in x], cpu, 0.4, label="--device cpu", color="#4c72b0")
-    ax.bar([i + 0.2 for i in x], auto, 0.4, label="--device auto (CPU cores + GPU)", color="#dd8452")
-    for i, (c, a) in enumerate(zip(cpu, auto)):
-        ax.text(i + 0.2, a, f"{c / a:.2f}×", ha="center", va="bottom", fontsize=8)
-    ax.set_xticks(list(x), [f"N = {n}\n{d} domains" for n, d in cases])
-    ax.set_ylabel("job seconds")
-    ax.set_title(f"tetiso run on {meta['cpus']} cores and one {meta['gpu'].split(',')[0]}")
-    ax.legend()
-    save(fig, folder / "seconds.png", f"{meta['script_cmd']}; commit {meta['commit']}; {meta['date']}\n"
-         f"{meta['cpu_model']}, {meta['gpu']}")
-    report = folder / "timeline-report.json"
-    report.write_text(json.dumps(cases[500, 125][0]["auto"]))
-    plot_timeline(report, folder / "timeline-n500-d125-auto.png")
-    report.unlink()
-    return dict(
-        meta=meta,
-        end_to_end=table(["N", "domains", "cpu s", "auto s", "auto speed-up", "surfaces (cmp)", "target"],
-                         [[n, d, f"{job[(n, d), 'cpu']:.1f}", f"**{job[(n, d), 'auto']:.1f}**",
-                           f"{job[(n, d), 'cpu'] / job[(n, d), 'auto']:.2f}×", verdict,
-                           HARDWARE_TARGETS.get((n, d), "")]
-                          for (n, d), (_, verdict) in cases.items()]),
-        split=table(["N / domains", "device", "tasks", "domain tasks", "busy s", "GPU busy", "raw triangles",
-                     "median domain s", "mean wait s"], split),
-        stages=table(["N / domains", "--device", "device", "generate M tris/s", "extract M tris/s", "reduce M tris/s",
-                      "seams s (all, CPU)"], stages))
-
-
 def stage_sums(report):
     """Summed seconds per (task kind, stage), and the sum of all task times."""
     sums = Counter()
@@ -613,34 +406,6 @@ def paper_reproduction(folder):
         bandwidth=table(["threads", "copy GB/s", "triad GB/s", "triad per thread / 1 thread's"],
                         [[t, f"{x['copy_gb_s']:,.1f}", f"{x['triad_gb_s']:,.1f}",
                           f"{x['triad_gb_s'] / t / res[min(res)]['triad_gb_s']:.2f}"] for t, x in sorted(res.items())]))
-
-
-def gpu_streams(folder):
-    """bench_gpu_streams: K Devices of one GPU against the host's cores."""
-    data, run = load(folder, "gpu_streams.json"), load(folder, "run.json")
-    sample = data["rows"][0]
-
-    def cpu_share(k):  # /usr/bin/time -v of that K run alone
-        log = folder / "raw" / f"k{k}_time.log"
-        found = re.search(r"Percent of CPU this job got: (\d+)%", log.read_text()) if log.exists() else None
-        return f"{int(found[1]):,} %" if found else ""
-
-    rows = []
-    for r in data["rows"]:
-        k = r["streams"]
-        gpu = k > 0
-        latency = r["warm_s"] * (k if gpu else 16) / data["count"]
-        rows.append([k if gpu else "CPU, 16 threads", f"{r['warm_s']:.2f}", f"{r['cold_s']:.2f}" if gpu else "",
-                     f"{r['domains_per_s']:.1f}", f"{r['raw_triangles_per_s'] / 1e6:.2f} M",
-                     f"{latency * 1e3:,.0f} ms" if latency < 1 else f"{latency:.2f} s",
-                     f"{r['buffer_bytes'] / 2**20:,.0f} MiB" if gpu else "",
-                     f"{r['device_used_bytes'] / 2**20:,.0f} MiB" if gpu else "", cpu_share(k) if gpu else ""])
-    gpus = [r for r in data["rows"] if r["streams"] > 0]
-    best = max(gpus, key=lambda r: r["raw_triangles_per_s"])
-    return dict(data=data, run=run, sample=sample, best=best, one=gpus[0],
-                cpu=next(r for r in data["rows"] if r["streams"] == 0),
-                streams=table(["K streams", "warm s", "cold s", "domains/s", "raw triangles/s", "per-task latency",
-                               "buffers held", "GPU memory used", "host CPU"], rows))
 
 
 def soundness(folder):
