@@ -81,9 +81,8 @@ nlohmann::json task_json(const TaskRecord& t) {
 // ones back to the kernel when freed (mmap above a threshold, heap trimming),
 // so every task faulted its working memory in again, page by page, zeroed.
 // Kept in the process instead, the next task reuses it: the peak is the same
-// (it is the largest task's), the page faults 2.4x fewer (193,884 against
-// 79,694) and the job 8 % faster on the 2-core VM (`tetiso run --lattice 160
-// --domains 8`, medians of 3). The thresholds are above any single array of a
+// (it is the largest task's), with far fewer page faults and a faster job.
+// The thresholds are above any single array of a
 // task (a 10^6-cell domain's tetrahedra are 96 MB).
 void keep_freed_memory() {
     constexpr int kThreshold = 1 << 30;

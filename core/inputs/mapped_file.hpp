@@ -1,7 +1,8 @@
 // Internal: a regular file's bytes, mapped read-only (no copy, and pages
 // the reader never touches are never read), else read whole where mapping
-// fails; anything but a regular file is refused (require_regular_file). A 270 MB piece took 0.27-0.31 s to read into a string on the
-// loaded 2-core VM, the time of all its parsing.
+// fails; anything but a regular file is refused (require_regular_file).
+// Reading a large piece into a string took as long as all its parsing
+// (results/solver-read).
 #pragma once
 
 #include <fcntl.h>

@@ -117,9 +117,9 @@ __global__ void for_each_kernel(std::int64_t n, Function function) {
 // The same for loops of heavy elements (Grain::kTests: a legality test each,
 // some 200 registers' worth of state uncapped): the compiler is held to the
 // registers that let three blocks share a multiprocessor (80), so that more
-// warps hide the latency of each test's long chains of loads. On an H200
-// the reduction ran faster so than with two blocks (128 registers) or
-// uncapped; four blocks (64) gained nothing more.
+// warps hide the latency of each test's long chains of loads: faster than
+// two blocks (128 registers) or uncapped, and four blocks (64) gain nothing
+// more (TETISO_GPU_TEST_BLOCKS_PER_SM overrides it, for measuring).
 template <class Function>
 __global__ void __launch_bounds__(kBlock, 3) for_each_heavy_kernel(std::int64_t n, Function function) {
     for (std::int64_t i = blockIdx.x * static_cast<std::int64_t>(blockDim.x) + threadIdx.x; i < n;

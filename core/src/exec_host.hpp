@@ -163,8 +163,8 @@ struct HostExec {
     // skipping the digits all share, then each run of equal priorities in
     // that order. On one thread, digits of 16 bits for large rounds (two
     // passes) and of 8 for small ones, where clearing and scanning
-    // 65,536-entry counters cost more than the sort (5 % of a job's profile
-    // with 30^3-cell domains, whose late rounds have tens of operations). On
+    // 65,536-entry counters cost more than the sort (late rounds have tens of
+    // operations). On
     // several, each thread counts and scatters its own block of the keys,
     // with 11-bit digits so that the per-block counters stay small and their
     // scan cheap; every stable sort by the same key gives the same order.

@@ -51,7 +51,7 @@ void require_regular_file(const std::filesystem::path& path);
 std::ifstream open_for_reading(const std::filesystem::path& path);
 
 // The whole file, read in one call: through istreambuf_iterator, byte by
-// byte, a 38 MB PLY took 0.39-0.61 s on the 2-core VM against 0.22-0.26 s.
+// byte, reading took about twice as long.
 // Throws tetiso::Error naming the file when it cannot be opened or read
 // (not a regular file, a file that shrinks while read); never reads more
 // than the size the file had when opened.

@@ -269,8 +269,8 @@ void build_fans(Exec& exec, Surface<Exec>& s, bool validate, Fans<Exec>& fans) {
 // border, at most one of them), c and d their third corners (-1 with them).
 // Each edge is written by its smaller end alone. The record is kept to what
 // the fan cannot give cheaply: every array here is written once per round and
-// read by every step after it, and at 15 workers a round's traffic is what
-// slows a task (scripts/probe_contention.py). Storing the faces, opposite
+// read by every step after it, and with every core of a node busy a round's
+// memory traffic is what slows a task. Storing the faces, opposite
 // corners and v0's slot in v1's ring as well (eight arrays, 32 bytes per
 // edge) made the edge table the largest thing a round wrote.
 

@@ -7,12 +7,11 @@
 // legality tests wait for the selection and run only for the operations it
 // reaches unblocked: in a round about one edge in twenty collapses and most
 // are blocked by a chosen neighbour, so computing Φ for all of them was most
-// of a round (on the paper surface at N = 100, Φ is computed 2.8 M times
-// instead of 17 M). The priority ranks shorter edges, relative to the other
-// edges of their faces, first: unlike Φ it is known before Φ is, and it gave
-// 10-13 % fewer triangles and a larger mean smallest angle (33.8° against
-// 29.6°) than ranking by Φ, at a smaller Hausdorff distance on the paper
-// surface and the same error bound. Flips, the lowest class, are proposed
+// of a round (Φ is computed for several times fewer edges). The priority
+// ranks shorter edges, relative to the other edges of their faces, first:
+// unlike Φ it is known before Φ is, and it gave fewer triangles and a
+// larger mean smallest angle than ranking by Φ, at a smaller Hausdorff
+// distance on the paper surface and the same error bound. Flips, the lowest class, are proposed
 // after all collapses are chosen, for the edges they left clear.
 //
 // Φ: for an interior edge (u, w) with faces f1 (running u → w) and f2 and unit

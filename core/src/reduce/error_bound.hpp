@@ -22,7 +22,7 @@
 // bounds the raw vertices it stands for. Vertex samples with the largest
 // error of their triangles as base would not: a raw vertex lies near the
 // inside of a triangle, which can stand farther from the new faces than its
-// corners do (up to 1.7x the bound over a job's seams on random fields,
+// corners do (well over the bound across a job's seams on random fields,
 // test_random_fields). Bounds add up only across calls whose input lacks the
 // raw vertices, e.g. a seam's region beyond the samples a job keeps.
 #pragma once
@@ -41,8 +41,7 @@ namespace tetiso::reduction {
 // order of their owners, so the samples of triangle t are one run (its
 // FaceGeometry's samples_begin .. samples_end, which sort() writes) and a
 // test reads them as one run rather than one cache miss each (the loads of
-// scattered samples were 4-5 % of a profile of the paper surface's
-// reduction). sort() restores the order at the start of every round; an
+// scattered samples showed in a profile of the reduction). sort() restores the order at the start of every round; an
 // operation changes only owner[], which the points stay in step with.
 // far_point is never reordered: triangle samples are few.
 template <class Exec>

@@ -450,8 +450,8 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
         // region's worst face: its quality, recomputed from its corners in
         // another order, came out a few units in the last place below the
         // stored one. That refused most collapses next to a needle, and the
-        // needle stayed (304 triangles with an angle below 1° in the N = 100
-        // paper surface's reduction, 49 without it).
+        // needle stayed (several times more triangles below 1° in the paper
+        // surface's reduction).
         const Vec pe = m.s.pos(end);
         const bool moves = p.x != pe.x || p.y != pe.y || p.z != pe.z;
         // No face with a normal of its own (valid) becomes degenerate or

@@ -94,9 +94,8 @@ inline Params make_params(const ReduceOptions& o) {
 // The most threads a round uses, whatever it is offered: the most measured.
 // A round is a dozen short parallel loops with a join after each; with every
 // one of them parallel, sixteen threads were as fast as eight or faster at
-// every size on the 16-core device, from an 84 K-triangle gyroid surface
-// (0.195 against 0.227 s, medians of 3) to the 1.64 M-triangle paper surface
-// at N = 100 (2.44 against 3.72 s).
+// every size on a 16-core machine, from small gyroid surfaces to the paper
+// surface at N = 100.
 constexpr int kMaxRoundThreads = 16;
 
 // Loads a piece (checked by the caller) into the state: its surface and,

@@ -53,7 +53,7 @@ struct WindowSlot {
     i32 rank, e, u, w;
     // -1 until computed. The corners themselves are found again when needed
     // (few operations own any): stored here, they made the window four times
-    // larger, and the 8-thread selection 1.4x slower.
+    // larger, and the selection on several threads slower.
     i32 owned_count;
 };
 
@@ -345,8 +345,8 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
 // round reads (test.dry_run). An operation found illegal then never enters
 // the window: it could block no one, so no one waits for it, and the chains
 // of waiting, which the steps follow one link a step, are those of the legal
-// operations alone (late rounds, where most candidates are illegal, took
-// three to four times fewer steps). What the sweep does with each operation
+// operations alone (late rounds, where most candidates are illegal, take
+// several times fewer steps). What the sweep does with each operation
 // is then settled after the steps, from the ranks that claimed each vertex:
 // an illegal one whose ends no earlier choice claimed is refused (and its Φ
 // written, as the sweep's test writes it), and the chosen ones are tested
