@@ -18,6 +18,6 @@ cmake -S . -B build-sanitize -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_
 cmake --build build-sanitize -j "$(nproc)"
 ctest --test-dir build-sanitize --output-on-failure -j "$(nproc)" --timeout 1200
 
-# Every reader under libFuzzer for a short fixed time, after replaying the
+# Every fuzz target (each reader, the reduction) for a short fixed time, after replaying the
 # inputs that once failed (the recorded campaign is tools/fuzz_campaign.sh).
 ./tools/fuzz.sh --seconds 20
