@@ -118,15 +118,16 @@ TaskMessage decode_task(const MessageBytes& bytes) {
 
 MessageBytes encode(const ResultMessage& message) {
     Writer out;
-    out.put(message.task);
+    const TaskRecord& r = message.record;
+    out.put(r.task);
     out.put(message.seconds);
-    out.put(message.threads);
-    out.put(message.triangles_in);
-    out.put(message.triangles_out);
-    out.put(message.samples_out);
-    out.put(message.stages);
-    out.put(message.field_low);
-    out.put(message.field_high);
+    out.put(r.threads);
+    out.put(r.triangles_in);
+    out.put(r.triangles_out);
+    out.put(r.samples_out);
+    out.put(r.stages);
+    out.put(r.field_low);
+    out.put(r.field_high);
     out.reserve(piece_size(message.piece));
     put_piece(out, message.piece);
     return std::move(out.bytes);
@@ -135,15 +136,16 @@ MessageBytes encode(const ResultMessage& message) {
 ResultMessage decode_result(const MessageBytes& bytes) {
     Reader in(bytes);
     ResultMessage message;
-    message.task = in.get<std::int32_t>();
+    TaskRecord& r = message.record;
+    r.task = in.get<std::int32_t>();
     message.seconds = in.get<double>();
-    message.threads = in.get<std::int32_t>();
-    message.triangles_in = in.get<std::uint64_t>();
-    message.triangles_out = in.get<std::uint64_t>();
-    message.samples_out = in.get<std::uint64_t>();
-    message.stages = in.get<TaskRecord::Stages>();
-    message.field_low = in.get<float>();
-    message.field_high = in.get<float>();
+    r.threads = in.get<std::int32_t>();
+    r.triangles_in = in.get<std::uint64_t>();
+    r.triangles_out = in.get<std::uint64_t>();
+    r.samples_out = in.get<std::uint64_t>();
+    r.stages = in.get<TaskRecord::Stages>();
+    r.field_low = in.get<float>();
+    r.field_high = in.get<float>();
     message.piece = get_piece(in);
     return message;
 }

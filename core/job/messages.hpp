@@ -34,12 +34,10 @@ struct TaskMessage {
 
 // Worker -> controller: a finished task, what it measured and its piece.
 struct ResultMessage {
-    std::int32_t task = 0;
-    double seconds = 0;        // the task's time on the worker
-    std::int32_t threads = 1;  // the most it ran with
-    std::uint64_t triangles_in = 0, triangles_out = 0, samples_out = 0;
-    TaskRecord::Stages stages;
-    float field_low = 0, field_high = 0;
+    double seconds = 0; // the task's time on the worker
+    // What the worker measured: the task, its threads, sizes, stages and
+    // field range (the controller adds where and when it ran).
+    TaskRecord record;
     Piece piece;
 };
 

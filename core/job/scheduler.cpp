@@ -10,15 +10,9 @@ namespace tetiso {
 
 ResultMessage result_message(const TaskRecord& record, double seconds, int threads, Piece piece) {
     ResultMessage result;
-    result.task = record.task;
     result.seconds = seconds;
-    result.threads = threads;
-    result.triangles_in = record.triangles_in;
-    result.triangles_out = record.triangles_out;
-    result.samples_out = record.samples_out;
-    result.stages = record.stages;
-    result.field_low = record.field_low;
-    result.field_high = record.field_high;
+    result.record = record;
+    result.record.threads = threads;
     result.piece = std::move(piece);
     return result;
 }
@@ -111,21 +105,13 @@ void Scheduler::on_ready(int worker, bool cores_known, double) {
 }
 
 void Scheduler::on_result(int rank, ResultMessage result, double now) {
-    const int task = result.task;
+    const int task = result.record.task;
     const TaskNode& n = job_.node(task);
-    TaskRecord record;
-    record.task = task;
+    TaskRecord record = result.record;
     record.kind = job_.kind(task);
     record.first_domain = n.first;
     record.domain_count = n.count;
     record.rank = rank;
-    record.threads = result.threads;
-    record.triangles_in = result.triangles_in;
-    record.triangles_out = result.triangles_out;
-    record.samples_out = result.samples_out;
-    record.stages = result.stages;
-    record.field_low = result.field_low;
-    record.field_high = result.field_high;
     record.end = now;
     record.start = std::max(0.0, now - result.seconds);
     const bool here = rank == 0 && task == here_;

@@ -543,16 +543,16 @@ TEST(Messages, EachDecodesWhatItsEncoderWrote) {
     record.field_low = -1;
     record.field_high = 3;
     const ResultMessage r = decode_result(encode(result_message(record, 1.5, 4, piece_of(6))));
-    EXPECT_EQ(r.task, 5);
+    EXPECT_EQ(r.record.task, 5);
     EXPECT_EQ(r.seconds, 1.5);
-    EXPECT_EQ(r.threads, 4);
-    EXPECT_EQ(r.triangles_in, 100u);
-    EXPECT_EQ(r.triangles_out, 40u);
-    EXPECT_EQ(r.samples_out, 9u);
-    EXPECT_EQ(r.stages.reduce, 0.25);
-    EXPECT_EQ(r.stages.gpu, 2);
-    EXPECT_EQ(r.field_low, -1);
-    EXPECT_EQ(r.field_high, 3);
+    EXPECT_EQ(r.record.threads, 4);
+    EXPECT_EQ(r.record.triangles_in, 100u);
+    EXPECT_EQ(r.record.triangles_out, 40u);
+    EXPECT_EQ(r.record.samples_out, 9u);
+    EXPECT_EQ(r.record.stages.reduce, 0.25);
+    EXPECT_EQ(r.record.stages.gpu, 2);
+    EXPECT_EQ(r.record.field_low, -1);
+    EXPECT_EQ(r.record.field_high, 3);
     EXPECT_EQ(r.piece.triangle_count(), 6u);
 
     EXPECT_EQ(decode_failure(encode(FailureMessage{4, "out of memory"})).what, "out of memory");
