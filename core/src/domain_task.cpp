@@ -72,6 +72,14 @@ DomainTaskResult run_domain_task(const Partition& partition, int domain, const D
     return run_built(std::move(built), partition.pieces_are_manifold(), options, std::move(result));
 }
 
+std::vector<DomainTaskResult> run_domain_tasks(const Partition& partition, std::span<const int> domains,
+                                               const DomainTaskOptions& options) {
+    std::vector<DomainTaskResult> results;
+    results.reserve(domains.size());
+    for (const int domain : domains) results.push_back(run_domain_task(partition, domain, options));
+    return results;
+}
+
 DomainTaskResult run_domain_task(Domain domain, const DomainTaskOptions& options) {
     return run_built(std::move(domain), true, options);
 }
