@@ -39,6 +39,10 @@
 
 namespace tetiso {
 
+namespace detail {
+class PieceTables;
+}
+
 // The pieces a .pvtu lists (paths resolved against its directory) and the
 // name of the array its PPointData marks as global ids (empty if none).
 struct PvtuIndex {
@@ -67,11 +71,9 @@ public:
                            const RankGroup& group = {});
     ~PvtuPartition() override;
 
-    int domain_count() const override { return static_cast<int>(source_id_.size()); }
-    const std::vector<int>& neighbours(int domain) const override {
-        return neighbours_.at(static_cast<std::size_t>(domain));
-    }
-    const std::vector<DomainTreeNode>& tree() const override { return tree_; }
+    int domain_count() const override;
+    const std::vector<int>& neighbours(int domain) const override;
+    const std::vector<DomainTreeNode>& tree() const override;
     // For an edge two or more pieces share; empty for any other (a job asks
     // only about locked vertices, which lie on shared edges).
     std::vector<int> domains_of_edge(GlobalId a, GlobalId b) const override;
@@ -79,13 +81,13 @@ public:
     Domain make_domain(int domain) const override;
     bool pieces_are_manifold() const override { return false; }
     std::string domain_name(int domain) const override;
-    double spacing() const override { return spacing_; }
-    std::int64_t node_count() const override { return node_count_; }
-    std::int64_t tet_count() const override { return tet_count_; }
+    double spacing() const override;
+    std::int64_t node_count() const override;
+    std::int64_t tet_count() const override;
     std::uint64_t fingerprint() const override { return fingerprint_; }
 
     // The .pvtu's own index of `domain`'s piece.
-    int source_id(int domain) const { return source_id_.at(static_cast<std::size_t>(domain)); }
+    int source_id(int domain) const;
     const std::filesystem::path& piece_path(int domain) const;
 
 private:
@@ -93,20 +95,9 @@ private:
     MeshSource source_;
     std::string ids_name_;
     std::vector<std::filesystem::path> pieces_;
-    std::vector<std::uint64_t> piece_digests_;
-    std::vector<int> source_id_;
-    std::vector<DomainTreeNode> tree_;
-    std::vector<std::vector<int>> neighbours_;
-    // Edges held by several pieces, by key, with their domains (sorted).
-    std::vector<EdgeKey> shared_keys_;
-    std::vector<std::int64_t> shared_first_;
-    std::vector<int> shared_domains_;
-    // Nodes held by several pieces, by id, with the position they take.
-    std::vector<GlobalId> shared_nodes_;
-    std::vector<float> shared_xyz_;
-    std::vector<float> shared_f_; // and the value it takes (of source.array)
-    double spacing_ = 0;
-    std::int64_t node_count_ = 0, tet_count_ = 0;
+    // The domains, shared nodes and edges, tree and spacing the pieces'
+    // scans gave (core/inputs/piece_tables.hpp, shared with the in-situ route).
+    std::unique_ptr<detail::PieceTables> tables_;
     std::uint64_t fingerprint_ = 0;
 };
 
