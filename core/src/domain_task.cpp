@@ -72,7 +72,7 @@ DomainTaskResult run_domain_task(const Partition& partition, int domain, const D
     return run_built(std::move(built), partition.pieces_are_manifold(), options, std::move(result));
 }
 
-std::vector<DomainTaskResult> run_domain_tasks(const Partition& partition, std::span<const int> domains,
+std::vector<DomainTaskResult> run_domain_tasks(const Partition& partition, const std::vector<int>& domains,
                                                const DomainTaskOptions& options) {
     std::vector<DomainTaskResult> results;
     results.reserve(domains.size());

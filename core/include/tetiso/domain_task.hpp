@@ -9,7 +9,6 @@
 #include <cstddef>
 #include <limits>
 #include <optional>
-#include <span>
 #include <vector>
 
 #include "tetiso/device.hpp"
@@ -51,7 +50,7 @@ DomainTaskResult run_domain_task(const Partition& partition, int domain, const D
 // (a batch), so that the fixed cost of a round is paid once for all of
 // them. Each result's piece is byte for byte what run_domain_task gives for
 // that domain alone. Seconds are the batch's, shared out by triangles.
-std::vector<DomainTaskResult> run_domain_tasks(const Partition& partition, std::span<const int> domains,
+std::vector<DomainTaskResult> run_domain_tasks(const Partition& partition, const std::vector<int>& domains,
                                                const DomainTaskOptions& options);
 
 // A domain already built, whose piece is a 2-manifold (a convex domain's);
