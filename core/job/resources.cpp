@@ -159,7 +159,13 @@ Grant ResourceManager::request(const ResourceRequest& request, double now) {
     if (best.device < 0) throw Error("no device of the node can hold a task of size " + std::to_string(request.size));
     // The device chosen takes a batch: as many tasks as end no later than
     // the task would alone elsewhere (all it may take where nowhere else can).
-    for (int count = most(static_cast<std::size_t>(best.device)); count > 1; --count) {
+    // Where the task could run alone elsewhere, a device whose model of it
+    // is not calibrated yet takes one: its guess could be far off, and one
+    // task teaches it the most.
+    const PerformanceModel* known = model(request.kind, best.device);
+    const bool calibrated = known && known->samples() >= PerformanceModel::kMinSamples;
+    const int most_here = std::isfinite(alone_end) && !calibrated ? 1 : most(static_cast<std::size_t>(best.device));
+    for (int count = most_here; count > 1; --count) {
         const Grant g = candidate(request, best.device, count, now);
         if (g.start + g.predicted_seconds <= alone_end) {
             best = g;

@@ -373,12 +373,15 @@ void Scheduler::place(int node, double now) {
     Placed p;
     p.task = task;
     p.node = node;
-    // A GPU's batch takes no more than the GPUs' share of the domains
+    // A GPU's batch takes no more than half the GPUs' share of the domains
     // waiting (this one and those ready behind it: after a domain the queue
-    // holds only domains), so that each GPU gets some to the end.
+    // holds only domains): each GPU gets some to the end, and pieces keep
+    // coming back for the seams, the batches halving as the queue empties.
     int most_in_batch = 1;
-    if (job_.kind(task) == TaskKind::domain && gpu_slots_ > 0)
-        most_in_batch = static_cast<int>((1 + queue_.ready_count() + gpu_slots_ - 1) / gpu_slots_);
+    if (job_.kind(task) == TaskKind::domain && gpu_slots_ > 0) {
+        const auto waiting = static_cast<int>(1 + queue_.ready_count());
+        most_in_batch = (waiting + 2 * gpu_slots_ - 1) / (2 * gpu_slots_);
+    }
     try {
         p.grant = placement.manager.request(placement.request(task, left, right, most_in_batch), now);
     } catch (const Error& e) {

@@ -8,8 +8,9 @@
 // and runs its grants one after another. A grant on a GPU carries a batch of
 // domain tasks (run_domain_tasks reduces them side by side): at most
 // --gpu-batch, as many as the GPU's memory holds by the estimate below, and
-// no more than the GPUs' share of the domains still waiting, so that the
-// batches shrink at the end of the queue and every GPU gets some. Processes that each open a context on
+// no more than half the GPUs' share of the domains still waiting, so that
+// the batches shrink at the end of the queue, every GPU gets some and
+// pieces keep coming back for the seams. Processes that each open a context on
 // one GPU pay its set-up each, and their kernels are time-sliced, not run
 // side by side; one task at a time in one context is the fastest way to share
 // a GPU and the safe one: its memory holds one task's buffers. The memory a

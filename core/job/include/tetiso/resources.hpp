@@ -21,7 +21,9 @@
 // carries the most tasks c <= k whose batch, of c times the size, ends no
 // later than the request would end on a device that takes one task alone,
 // so that a device that finishes a task first still gets it; where no such
-// device can hold the request, c = k. The models learn the batch's time as
+// device can hold the request, c = k; while the device's model of the task
+// is not calibrated and the task could run alone elsewhere, c = 1. The
+// models learn the batch's time as
 // a function of its size; until a device's model has seen two sizes, a
 // batch is assumed to take as long as its tasks one after another.
 //
