@@ -202,8 +202,8 @@ public:
     std::vector<Piece> execute_batch(const std::vector<int>& tasks, std::vector<TaskRecord>& records,
                                      const TaskThreads& threads) const;
 
-    // Makes this process's Device for CUDA device `gpu` and runs a small domain
-    // on it, so that the context, the kernels' loading and the first
+    // Makes this process's Device for CUDA device `gpu` and runs a small
+    // batch of two domains on it, so that the context, the kernels' loading and the first
     // allocations are paid before the job's first task there (a GPU's
     // driving process does this at start-up: the first task would otherwise
     // take seconds and teach the resource manager that the GPU is slow).
