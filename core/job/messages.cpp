@@ -116,8 +116,9 @@ TaskMessage decode_task(const MessageBytes& bytes) {
     return message;
 }
 
-MessageBytes encode(const ResultMessage& message) {
-    Writer out;
+namespace {
+
+void put_result(Writer& out, const ResultMessage& message) {
     const TaskRecord& r = message.record;
     out.put(r.task);
     out.put(message.seconds);
@@ -130,11 +131,9 @@ MessageBytes encode(const ResultMessage& message) {
     out.put(r.field_high);
     out.reserve(piece_size(message.piece));
     put_piece(out, message.piece);
-    return std::move(out.bytes);
 }
 
-ResultMessage decode_result(const MessageBytes& bytes) {
-    Reader in(bytes);
+ResultMessage get_result(Reader& in) {
     ResultMessage message;
     TaskRecord& r = message.record;
     r.task = in.get<std::int32_t>();
@@ -147,6 +146,52 @@ ResultMessage decode_result(const MessageBytes& bytes) {
     r.field_low = in.get<float>();
     r.field_high = in.get<float>();
     message.piece = get_piece(in);
+    return message;
+}
+
+} // namespace
+
+MessageBytes encode(const ResultMessage& message) {
+    Writer out;
+    put_result(out, message);
+    return std::move(out.bytes);
+}
+
+ResultMessage decode_result(const MessageBytes& bytes) {
+    Reader in(bytes);
+    return get_result(in);
+}
+
+MessageBytes encode(const BatchMessage& message) {
+    Writer out;
+    out.put(message.gpu);
+    out.put_array(message.tasks);
+    return std::move(out.bytes);
+}
+
+BatchMessage decode_batch(const MessageBytes& bytes) {
+    Reader in(bytes);
+    BatchMessage message;
+    message.gpu = in.get<std::int32_t>();
+    message.tasks = in.get_array<std::int32_t>();
+    return message;
+}
+
+MessageBytes encode(const BatchResultMessage& message) {
+    Writer out;
+    out.put(static_cast<std::uint64_t>(message.results.size()));
+    for (const ResultMessage& result : message.results) put_result(out, result);
+    return std::move(out.bytes);
+}
+
+BatchResultMessage decode_batch_result(const MessageBytes& bytes) {
+    Reader in(bytes);
+    BatchResultMessage message;
+    const auto count = in.get<std::uint64_t>();
+    // Each result takes more bytes than this; a count that no message of
+    // this length can hold is refused before anything is allocated.
+    if (count > bytes.size()) throw Error("truncated message between MPI ranks");
+    for (std::uint64_t i = 0; i < count; ++i) message.results.push_back(get_result(in));
     return message;
 }
 

@@ -125,6 +125,22 @@ std::optional<JobResult> run_mpi(const Job& job, const Progress& progress) {
     }
     std::optional<NodeLayout> nodes;
     if (job.config().device != JobConfig::Device::cpu) nodes = node_layout(rank, ranks, job.config());
+    if (nodes && job.config().device == JobConfig::Device::gpu) {
+        // A node with workers but no GPU its tasks may use, by its lowest rank.
+        int without = -1;
+        if (rank == 0)
+            for (int r = ranks - 1; r >= 1; --r) {
+                const auto node = static_cast<std::size_t>(nodes->node_of[static_cast<std::size_t>(r)]);
+                if (nodes->gpus[node].empty()) without = r;
+            }
+        MPI_Bcast(&without, 1, MPI_INT, 0, MPI_COMM_WORLD);
+        if (without >= 0) {
+            if (rank != 0) throw JobStopped();
+            const int gpu = job.config().gpu;
+            throw Error("--device gpu: the node of rank " + std::to_string(without) + " has no CUDA device" +
+                        (gpu >= 0 ? " " + std::to_string(gpu) : std::string()) + " this build can use");
+        }
+    }
     if (rank != 0) {
         work(job, nodes ? nodes->my_gpu : -1);
         return std::nullopt;

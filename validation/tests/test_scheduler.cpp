@@ -87,6 +87,39 @@ public:
         }
         pending_.emplace(now_ + seconds, std::move(event));
     }
+    // A batch takes the sum of its tasks' durations; it fails, naming the
+    // first of its tasks in `failing`, where one is.
+    void send_batch(int worker, BatchMessage message) override {
+        const std::vector<int> tasks(message.tasks.begin(), message.tasks.end());
+        batches.push_back({now_, worker, tasks, message.gpu, sent.size()});
+        double seconds = 0;
+        for (const int t : tasks) {
+            sent.push_back({now_, worker, t, message.gpu});
+            seconds += duration(t, worker);
+        }
+        if (stopped.count(worker)) return;
+        WorkerEvent event;
+        event.worker = worker;
+        const auto failed = std::find_if(tasks.begin(), tasks.end(), [&](int t) { return failing.count(t) > 0; });
+        if (failed != tasks.end()) {
+            event.kind = WorkerEvent::Kind::failure;
+            event.failure = FailureMessage{*failed, "injected"};
+        } else {
+            event.kind = WorkerEvent::Kind::batch_result;
+            std::vector<TaskRecord> records(tasks.size());
+            std::vector<Piece> pieces;
+            if (execute) {
+                pieces = job_.execute_batch(tasks, records, TaskThreads{1, {}, {}});
+            } else {
+                for (std::size_t i = 0; i < tasks.size(); ++i) {
+                    records[i].task = tasks[i];
+                    pieces.push_back(piece_of(10));
+                }
+            }
+            event.batch = batch_result_message(records, seconds, 1, std::move(pieces));
+        }
+        pending_.emplace(now_ + seconds, std::move(event));
+    }
     void lend_cores(int borrower, int lender) override { lent.push_back({now_, borrower, lender}); }
     std::optional<WorkerEvent> receive(double deadline) override {
         if (pending_.empty() || pending_.begin()->first > deadline) {
@@ -108,7 +141,15 @@ public:
     }
     void advance(double seconds) { now_ += seconds; }
 
-    std::vector<Sent> sent;
+    struct Batch {
+        double at;
+        int worker;
+        std::vector<int> tasks;
+        int gpu;
+        std::size_t sent_before; // tasks sent before it, batches' or not
+    };
+    std::vector<Sent> sent; // every task, those of batches too
+    std::vector<Batch> batches;
     std::vector<Lent> lent;
     std::vector<double> busy;
     std::vector<bool> stops;
@@ -383,6 +424,192 @@ TEST(Scheduler, DeviceGpuSendsEveryDomainToADriverAndRefusesWhatNoGpuHolds) {
     EXPECT_TRUE(transport.sent.empty());
 }
 
+namespace {
+
+// One node: rank 0 controls, ranks 1 and 2 drive GPUs 0 and 1, ranks 3 and 4
+// work on the CPU.
+SchedulerSetup two_gpus_setup() {
+    NodeLayout nodes;
+    nodes.node_of = {0, 0, 0, 0, 0};
+    nodes.driving = {-1, 0, 1, -1, -1};
+    nodes.workers = {4};
+    nodes.gpus = {{0, 1}};
+    nodes.gpu_mib = {80000};
+    SchedulerSetup setup = mpi_setup(5);
+    setup.nodes = nodes;
+    return setup;
+}
+
+int domain_count_of(const Job& job) {
+    int domains = 0;
+    for (int t = 0; t < job.task_count(); ++t) domains += job.kind(t) == TaskKind::domain;
+    return domains;
+}
+
+} // namespace
+
+TEST(Scheduler, UnderDeviceGpuEveryGpuGetsBatchesThatShrinkAtTheEnd) {
+    JobConfig config = lattice_job(24, 64);
+    config.gpu_batch = 8;
+    Job job(config);
+    const_cast<JobConfig&>(job.config()).device = JobConfig::Device::gpu;
+    const int domains = domain_count_of(job);
+    FakeTransport transport(job, {1, 2, 3, 4}, true);
+    transport.duration = [](int, int worker) { return worker <= 2 ? 0.05 : 1.0; };
+    Scheduler scheduler(job, two_gpus_setup());
+    const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.1));
+    ASSERT_TRUE(result.has_value());
+    EXPECT_EQ(result->tasks.size(), static_cast<std::size_t>(job.task_count()));
+    // Every domain task went to a GPU's driver once, with that GPU.
+    std::map<int, int> domains_on; // driver -> domain tasks
+    std::set<int> seen;
+    for (const FakeTransport::Sent& s : transport.sent) {
+        if (job.kind(s.task) != TaskKind::domain) continue;
+        ASSERT_TRUE(s.worker == 1 || s.worker == 2) << job.describe(s.task) << " went to rank " << s.worker;
+        EXPECT_EQ(s.gpu, s.worker - 1);
+        EXPECT_TRUE(seen.insert(s.task).second) << job.describe(s.task) << " was sent twice";
+        ++domains_on[s.worker];
+    }
+    EXPECT_EQ(static_cast<int>(seen.size()), domains);
+    EXPECT_GT(domains_on[1], 0);
+    EXPECT_GT(domains_on[2], 0);
+    // Batches: at most --gpu-batch, at most half of each GPU's share of the
+    // domains not sent yet (two GPUs share them), full while many wait,
+    // smaller at the end.
+    ASSERT_FALSE(transport.batches.empty());
+    for (const FakeTransport::Batch& b : transport.batches) {
+        int waiting = domains;
+        for (std::size_t i = 0; i < b.sent_before; ++i) waiting -= job.kind(transport.sent[i].task) == TaskKind::domain;
+        EXPECT_LE(b.tasks.size(), 8u);
+        EXPECT_LE(static_cast<int>(b.tasks.size()), (waiting + 3) / 4) << waiting << " domains waited";
+        for (const int t : b.tasks) EXPECT_EQ(job.kind(t), TaskKind::domain);
+    }
+    EXPECT_EQ(transport.batches.front().tasks.size(), 8u);
+    // The last domain sent: alone, or in a batch smaller than the first.
+    std::size_t last_domain = 0;
+    for (std::size_t i = 0; i < transport.sent.size(); ++i)
+        if (job.kind(transport.sent[i].task) == TaskKind::domain) last_domain = i;
+    int last_grant = 1;
+    for (const FakeTransport::Batch& b : transport.batches)
+        if (b.sent_before <= last_domain && last_domain < b.sent_before + b.tasks.size())
+            last_grant = static_cast<int>(b.tasks.size());
+    EXPECT_LT(last_grant, 8);
+    // The records stay per task, end to end within each batch: no rank
+    // holds two tasks at once.
+    std::map<int, std::vector<std::pair<double, double>>> spans;
+    for (const TaskRecord& r : result->tasks) spans[r.rank].push_back({r.start, r.end});
+    for (auto& [rank, span] : spans) {
+        std::sort(span.begin(), span.end());
+        for (std::size_t i = 1; i < span.size(); ++i) EXPECT_LE(span[i - 1].second, span[i].first + 1e-9) << "rank " << rank;
+    }
+}
+
+TEST(Scheduler, UnderAutoTheCpuKeepsDomainsAndTheGpusTakeBatches) {
+    JobConfig config = lattice_job(24, 64);
+    config.device = JobConfig::Device::automatic;
+    const Job job(config);
+    FakeTransport transport(job, {1, 2, 3, 4}, true);
+    // Per task, the GPUs are ten times faster than a CPU worker; a batch
+    // takes the sum of its tasks.
+    transport.duration = [](int, int worker) { return worker <= 2 ? 0.1 : 1.0; };
+    Scheduler scheduler(job, two_gpus_setup());
+    const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.1));
+    ASSERT_TRUE(result.has_value());
+    int on_cpu = 0;
+    for (const FakeTransport::Sent& s : transport.sent)
+        if (job.kind(s.task) == TaskKind::domain && s.worker > 2) ++on_cpu;
+    EXPECT_GT(on_cpu, 0) << "the CPU finishes some domains first";
+    std::set<int> batched_on;
+    std::size_t largest = 0;
+    for (const FakeTransport::Batch& b : transport.batches) {
+        batched_on.insert(b.worker);
+        largest = std::max(largest, b.tasks.size());
+    }
+    EXPECT_EQ(batched_on, (std::set<int>{1, 2}));
+    EXPECT_GT(largest, 1u);
+    // Each GPU record carries its share of its batch's prediction.
+    for (const TaskRecord& r : result->tasks)
+        if (r.rank == 1 || r.rank == 2) {
+            EXPECT_GT(r.predicted_seconds, 0) << job.describe(r.task);
+        }
+}
+
+TEST(Scheduler, AFailureInsideABatchNamesItsTask) {
+    JobConfig config = lattice_job(24, 64);
+    config.gpu_batch = 8;
+    Job job(config);
+    const_cast<JobConfig&>(job.config()).device = JobConfig::Device::gpu;
+    // The third domain in queue order: inside the first batch, not its first.
+    std::vector<int> order = queue_order(job, job.task_count());
+    order.erase(std::remove_if(order.begin(), order.end(), [&](int t) { return job.kind(t) != TaskKind::domain; }),
+                order.end());
+    const int failing = order[2];
+    FakeTransport transport(job, {1, 2, 3, 4}, true);
+    transport.failing = {failing};
+    Scheduler scheduler(job, two_gpus_setup());
+    EXPECT_FALSE(drive(job, scheduler, transport, hooks_here(transport, job, 0.1)).has_value());
+    ASSERT_TRUE(scheduler.failure().has_value());
+    EXPECT_EQ(scheduler.failure()->task, failing);
+    EXPECT_EQ(scheduler.failure()->what, "injected");
+    ASSERT_FALSE(transport.batches.empty());
+    const FakeTransport::Batch& first = transport.batches.front();
+    EXPECT_GT(first.tasks.size(), 2u);
+    EXPECT_EQ(first.tasks[2], failing);
+    EXPECT_EQ(scheduler.failure()->rank, first.worker);
+    EXPECT_EQ(transport.stops, std::vector<bool>{true});
+}
+
+// Job::execute_batch: each piece and record what the task alone gives, and
+// a failing task named, the first that fails in the batch's order.
+TEST(Scheduler, ABatchIsEachTaskAloneAndItsFailureNamesTheTask) {
+    const Job job(lattice_job(20, 8));
+    std::vector<int> tasks;
+    for (int t = job.task_count() - 1; t >= 0; --t)
+        if (job.kind(t) == TaskKind::domain) tasks.push_back(t); // not in queue order
+    std::vector<TaskRecord> records;
+    const std::vector<Piece> pieces = job.execute_batch(tasks, records, TaskThreads{1, {}, {}});
+    ASSERT_EQ(pieces.size(), tasks.size());
+    ASSERT_EQ(records.size(), tasks.size());
+    for (std::size_t i = 0; i < tasks.size(); ++i) {
+        TaskRecord alone;
+        const Piece piece = job.execute(tasks[i], nullptr, nullptr, alone, TaskThreads{1, {}, {}});
+        EXPECT_TRUE(same_surface(pieces[i], piece)) << job.describe(tasks[i]);
+        EXPECT_EQ(records[i].task, tasks[i]);
+        EXPECT_EQ(records[i].triangles_in, alone.triangles_in);
+        EXPECT_EQ(records[i].triangles_out, alone.triangles_out);
+        EXPECT_EQ(records[i].samples_out, alone.samples_out);
+    }
+    EXPECT_THROW(job.execute_batch({0}, records, TaskThreads{1, {}, {}}), Error) << "a seam is no domain task";
+
+    // A field that is not finite where x < 2: the domains there fail.
+    JobConfig config = lattice_job(20, 8);
+    config.field = "sqrt(x - 2)";
+    config.level = 0.5;
+    const Job partly(config);
+    std::vector<int> fine, failing;
+    std::map<int, std::string> why;
+    for (const int t : tasks) {
+        TaskRecord alone;
+        try {
+            partly.execute(t, nullptr, nullptr, alone, TaskThreads{1, {}, {}});
+            fine.push_back(t);
+        } catch (const Error& e) {
+            failing.push_back(t);
+            why[t] = e.what();
+        }
+    }
+    ASSERT_FALSE(fine.empty());
+    ASSERT_GE(failing.size(), 2u);
+    const std::vector<int> batch{fine[0], failing[1], failing[0]};
+    try {
+        partly.execute_batch(batch, records, TaskThreads{1, {}, {}});
+        ADD_FAILURE() << "the batch did not fail";
+    } catch (const BatchTaskError& e) {
+        EXPECT_EQ(e.task, failing[1]);
+        EXPECT_EQ(std::string(e.what()), why[failing[1]]);
+    }
+}
+
 TEST(Scheduler, AStoppedWorkerIsNamedAtItsTasksDeadline) {
     const Job job(lattice_job(12, 27));
     const double floor = 5;
@@ -563,9 +790,30 @@ TEST(Messages, EachDecodesWhatItsEncoderWrote) {
     EXPECT_EQ(decode_ready(encode(ReadyMessage{cores})).cores, cores);
     EXPECT_EQ(decode_lend(encode(LendMessage{cores})).cores, cores);
 
+    const BatchMessage batch = decode_batch(encode(BatchMessage{1, {4, 9, 11}}));
+    EXPECT_EQ(batch.gpu, 1);
+    EXPECT_EQ(batch.tasks, (std::vector<std::int32_t>{4, 9, 11}));
+    TaskRecord second = record;
+    second.task = 6;
+    second.stages.reduce = 0.75;
+    const BatchResultMessage results =
+        decode_batch_result(encode(batch_result_message({record, second}, 2.0, 3, {piece_of(2), piece_of(5)})));
+    ASSERT_EQ(results.results.size(), 2u);
+    EXPECT_EQ(results.results[0].record.task, 5);
+    EXPECT_EQ(results.results[1].record.task, 6);
+    EXPECT_EQ(results.results[1].piece.triangle_count(), 5u);
+    EXPECT_EQ(results.results[0].record.threads, 3);
+    // The batch's seconds shared out by the tasks' stage seconds.
+    EXPECT_DOUBLE_EQ(results.results[0].seconds, 0.5);
+    EXPECT_DOUBLE_EQ(results.results[1].seconds, 1.5);
+
     // Bytes that end early are an error, not a read past them.
     MessageBytes cut = encode(result_message(record, 1.5, 4, piece_of(6)));
     cut.resize(cut.size() - 1);
     EXPECT_THROW(decode_result(cut), Error);
     EXPECT_THROW(decode_task(MessageBytes(3)), Error);
+    MessageBytes cut_batch = encode(batch_result_message({record, second}, 2.0, 3, {piece_of(2), piece_of(5)}));
+    cut_batch.resize(cut_batch.size() - 1);
+    EXPECT_THROW(decode_batch_result(cut_batch), Error);
+    EXPECT_THROW(decode_batch(MessageBytes(6)), Error);
 }
