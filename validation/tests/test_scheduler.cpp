@@ -744,6 +744,19 @@ TEST(Scheduler, TheSurfaceIsTheSameForEverySchedule) {
         ASSERT_TRUE(result.has_value());
         EXPECT_TRUE(same_surface(result->surface, reference));
     }
+    // Two GPUs' drivers given every domain in batches (run here on the host
+    // by Job::execute_batch), two workers for the seams.
+    SCOPED_TRACE("two GPUs, batches");
+    FakeTransport transport(job, {1, 2, 3, 4}, true);
+    transport.execute = true;
+    transport.duration = [](int task, int worker) { return 0.1 + ((task * 7 + worker) % 5) * 0.1; };
+    Scheduler scheduler(job, two_gpus_setup());
+    const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.2, true));
+    ASSERT_TRUE(result.has_value());
+    EXPECT_TRUE(same_surface(result->surface, reference));
+    std::size_t batched = 0;
+    for (const FakeTransport::Batch& b : transport.batches) batched += b.tasks.size();
+    EXPECT_GT(batched, 1u);
 }
 
 TEST(Messages, EachDecodesWhatItsEncoderWrote) {
