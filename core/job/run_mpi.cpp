@@ -46,7 +46,9 @@ JobResult control(const Job& job, int ranks, const Progress& progress, const std
 
     DriveHooks hooks;
     hooks.progress = progress;
-    hooks.on_running = [&](const std::map<int, int>& running) { in_flight.update(job, running, ranks); };
+    hooks.on_running = [&](const std::map<int, int>& running) {
+        in_flight.update(job, running, ranks, scheduler.batches());
+    };
     // A seam run here runs on the cores of rank 0 and of every worker, which
     // are all idle then and wait without spinning: one thread per rank's
     // share, on the union of the ranks' bindings. Threads do not change the

@@ -162,6 +162,7 @@ void Scheduler::on_result(int rank, ResultMessage result, double now) {
             placed_.erase(it);
         }
         running_.erase(rank);
+        batches_.erase(rank);
         end_lends_to(rank);
     }
     keep_result(task, std::move(result.piece), result.seconds, record);
@@ -177,7 +178,8 @@ void Scheduler::on_batch_result(int rank, std::vector<ResultMessage> results, do
     bool matches = batch.size() == results.size();
     for (std::size_t i = 0; matches && i < batch.size(); ++i) matches = results[i].record.task == batch[i];
     if (!matches) {
-        on_failure(rank, batch.empty() ? -1 : batch.front(),
+        const auto held_task = running_.find(rank);
+        on_failure(rank, !batch.empty() ? batch.front() : held_task != running_.end() ? held_task->second : -1,
                    "answered a batch of " + std::to_string(batch.size()) + " tasks with other results", now);
         return;
     }

@@ -125,6 +125,8 @@ public:
     // rank -> task it holds, the first of its batch (a task the controller
     // runs is not among them).
     const std::map<int, int>& running() const { return running_; }
+    // rank -> the batch it runs, where it runs one.
+    const std::map<int, std::vector<int>>& batches() const { return batches_; }
     // The pieces a task run here takes (null for a domain task).
     const Piece* input(int task, bool right) const;
     // The finished job (done(), no failure): the surface and the records.
