@@ -150,7 +150,7 @@ int run(int n, const std::string& dir, int repeats) {
                     calls += text;
                     std::snprintf(text, sizeof text,
                                   "\"nodes\": %.0f, \"tetrahedra\": %.0f, \"extracted\": %.0f, \"reduced\": %.0f, "
-                                  "\"bytes_sent\": %.0f, \"seams\": %.0f}",
+                                  "\"bytes_sent\": %.0f, \"seams_run\": %.0f}",
                                   v[7], v[8], v[9], v[10], v[11], v[12]);
                     calls += text;
                 }
