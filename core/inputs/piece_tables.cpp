@@ -51,8 +51,8 @@ namespace {
 
 // Calls found(u, v, w, t) for every face of `tets` that only one
 // tetrahedron, t, has. Faces are bucketed by their smallest corner (a counting sort) and
-// each bucket, a dozen faces or so, sorted on its own: for 23 M faces this
-// is several times faster than sorting them all.
+// each bucket, a dozen faces or so, sorted on its own, which is faster than
+// sorting them all.
 template <class Found>
 void for_each_boundary_face(const std::int32_t* tets, std::size_t count, std::size_t nodes, Found found) {
     std::vector<std::int64_t> first(nodes + 1, 0);

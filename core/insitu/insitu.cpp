@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <new>
 #include <utility>
 
 #include "communicator.hpp"
@@ -167,6 +168,8 @@ InSituResult InSituSession::isosurface(const InSituPiece& piece, const InSituOpt
                 checked = insitu::check_piece(piece);
             } catch (const Error& e) {
                 problem = piece_name(s.rank) + ": " + e.what();
+            } catch (const std::bad_alloc&) {
+                problem = piece_name(s.rank) + ": out of memory while checking it";
             }
         }
         insitu::agree(s.comm, problem);
@@ -177,9 +180,17 @@ InSituResult InSituSession::isosurface(const InSituPiece& piece, const InSituOpt
 
     // This piece's boundary, pooled with every other's into the tables.
     stage = Clock::now();
+    // A rank that cannot scan still takes part in the exchange, its problem
+    // in its share, so that every rank throws it.
     std::vector<std::pair<int, detail::PieceScan>> mine;
-    mine.emplace_back(s.rank, detail::scan_piece(checked.mesh, s.rank));
-    const std::string share = detail::pack_scans("", mine);
+    std::string scan_problem;
+    try {
+        mine.emplace_back(s.rank, detail::scan_piece(checked.mesh, s.rank));
+    } catch (const std::bad_alloc&) {
+        mine.clear();
+        scan_problem = "rank " + std::to_string(s.rank) + ": out of memory while scanning " + piece_name(s.rank);
+    }
+    const std::string share = detail::pack_scans(scan_problem, mine);
     std::vector<std::pair<int, detail::PieceScan>>().swap(mine);
     cost.seconds.scan = seconds_since(stage);
     stage = Clock::now();

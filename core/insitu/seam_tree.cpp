@@ -8,6 +8,7 @@
 #include <deque>
 #include <limits>
 #include <map>
+#include <new>
 
 #include "byte_buffer.hpp"
 #include "tetiso/domain_task.hpp"
@@ -147,6 +148,8 @@ TreeRun run_tree(MPI_Comm comm, const Partition& partition, const std::vector<in
                     piece = std::move(done.piece);
                 } catch (const Error& e) {
                     run.problem = partition.domain_name(n.first) + ": " + e.what();
+                } catch (const std::bad_alloc&) {
+                    run.problem = partition.domain_name(n.first) + ": out of memory";
                 }
             }
             run.domain_seconds += seconds_since(start);
@@ -169,9 +172,10 @@ TreeRun run_tree(MPI_Comm comm, const Partition& partition, const std::vector<in
                     seam_options.sample_rings = options.sample_rings;
                     piece = seam(*left, *right, partition.edge_domains(n.first, n.count), seam_options);
                     ++run.seams;
-                } catch (const Error& e) {
+                } catch (const std::exception& e) {
+                    const bool memory = dynamic_cast<const std::bad_alloc*>(&e) != nullptr;
                     run.problem = "seam of domains " + std::to_string(n.first) + "-" + std::to_string(n.first + n.count - 1) +
-                                  ": " + e.what();
+                                  ": " + (memory ? std::string("out of memory") : std::string(e.what()));
                 }
             }
             run.seam_seconds += seconds_since(start);

@@ -11,6 +11,8 @@
 //   bad      the last rank's piece has a corner out of range
 //   overlap  the ghost cells are not marked (two ranks hold them)
 //   options  the last rank asks for another level
+//   flat     the last rank's tetrahedron 0 has zero volume, found in its
+//            domain task, after the collectives of the call's start
 // In the error modes every rank writes the message it caught to
 // DIR/error-R.txt; the exit status is 0 when the call threw on this rank.
 #include <mpi.h>
@@ -173,6 +175,14 @@ int main(int argc, char** argv) {
         } else {
             if (mode == "bad" && rank == size - 1) piece.tets[5] = static_cast<std::int32_t>(piece.nodes());
             if (mode == "options" && rank == size - 1) options.level = level + 0.25;
+            if (mode == "flat" && rank == size - 1) {
+                // Tetrahedron 0 over four nodes of one plane: the piece passes
+                // the checks and the scan, and its domain task fails.
+                std::vector<std::int32_t> plane;
+                for (std::size_t i = 0; i < piece.nodes() && plane.size() < 4; ++i)
+                    if (piece.x(i, 2) == piece.x(0, 2)) plane.push_back(static_cast<std::int32_t>(i));
+                std::copy(plane.begin(), plane.end(), piece.tets.begin());
+            }
             try {
                 session.isosurface(piece.view(mode != "overlap"), options);
             } catch (const tetiso::Error& e) {

@@ -3,8 +3,9 @@
 # 1, 2 and 3 ranks the surface a solver's ranks get in memory is the bytes
 # `tetiso run --mesh` writes for the same pieces as a .pvtu, ghost cells
 # skipped; a second call of the session gives the same bytes; bad input on
-# one rank, overlapping pieces and options that differ between ranks end
-# the call on every rank with one message naming the rank, nothing written.
+# one rank, a domain task failing on one rank, overlapping pieces and
+# options that differ between ranks end the call on every rank with one
+# message naming the rank, nothing written.
 # Usage: test_insitu.sh tetiso mpiexec test_insitu
 set -u
 tetiso=$1
@@ -48,6 +49,11 @@ for k in 1 2 3; do
     mkdir -p "$dir"
     mpi "$k" "$program" bad "$dir" && ok || fail "$k ranks: bad input did not throw on every rank"
     same_error "$dir" "$k" "rank $((k - 1)): rank $((k - 1))'s piece: tetrahedron 1 refers to node" "$k ranks, bad input"
+
+    dir="$work/flat-$k"
+    mkdir -p "$dir"
+    mpi "$k" "$program" flat "$dir" && ok || fail "$k ranks: a failing domain task did not throw on every rank"
+    same_error "$dir" "$k" "rank $((k - 1)): domain [0-9]* (rank $((k - 1))'s piece): rank $((k - 1))'s piece: tetrahedron 0 has zero volume" "$k ranks, failing task"
 
     dir="$work/options-$k"
     mkdir -p "$dir"

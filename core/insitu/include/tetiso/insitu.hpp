@@ -76,7 +76,10 @@ struct ArrayView {
 //                vtkGhostType, DUPLICATECELL). Only with a mask are the kept
 //                tetrahedra copied (4 int32 each).
 // Nodes that no kept tetrahedron uses are ignored. Coordinates and values
-// are taken as float, as the .pvtu reader takes them.
+// are taken as float, as the .pvtu reader takes them. A message about a
+// node or tetrahedron names its index in the arrays as given, except that
+// a tetrahedron found wrong only once the domain is built (zero volume) is
+// numbered among the kept ones (the same where the ghosts come last).
 struct InSituPiece {
     ArrayView coordinates;
     ArrayView global_ids;
