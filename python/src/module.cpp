@@ -15,5 +15,8 @@ PYBIND11_MODULE(_tetiso, m) {
     register_surface(m);
     register_stages(m);
     register_checks(m);
+#ifdef TETISO_PYTHON_INSITU
+    register_insitu(m);
+#endif
     m.attr("__version__") = "0.1.0";
 }

@@ -1,12 +1,12 @@
 """Shared fixtures: the `tetiso` command the module is compared against, the
-repository's meshes, and a reader of the ASCII .vtu fixture as arrays."""
+repository's meshes, and the ASCII .vtu fixture as arrays."""
 import os
 import pathlib
 import subprocess
-import xml.etree.ElementTree as ElementTree
 
-import numpy as np
 import pytest
+
+from vtu_fixture import read_ascii_vtu
 
 SOURCE_DIR = pathlib.Path(os.environ.get("TETISO_SOURCE_DIR", pathlib.Path(__file__).resolve().parents[2]))
 
@@ -25,16 +25,6 @@ def cli():
         return done
 
     return run
-
-
-def read_ascii_vtu(path, array):
-    """Points (n, 3) float64, tetrahedra (m, 4) int64 and one point array of an
-    ASCII .vtu of tetrahedra (the meshes/solver fixtures)."""
-    root = ElementTree.parse(path).getroot()
-    arrays = {a.get("Name"): np.array(a.text.split(), dtype=float) for a in root.iter("DataArray")}
-    types = arrays["types"]
-    assert (types == 10).all(), "a fixture of tetrahedra only"
-    return arrays["Points"].reshape(-1, 3), arrays["connectivity"].astype(np.int64).reshape(-1, 4), arrays[array]
 
 
 @pytest.fixture(scope="session")

@@ -43,3 +43,10 @@ __all__ = [
     "reduce",
     "seam",
 ]
+
+# The in-situ session, where tetiso was built with MPI and mpi4py's headers.
+try:
+    from ._tetiso import InSituSession  # noqa: F401
+    __all__.append("InSituSession")
+except ImportError:
+    pass
