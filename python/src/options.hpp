@@ -84,15 +84,17 @@ public:
         if (device != "gpu") throw Error("device: '" + device + "' is neither 'cpu' nor 'gpu'");
         if (gpu < 0) throw Error("gpu: must be at least 0, not " + std::to_string(gpu));
         static std::mutex table_lock;
-        static std::map<int, std::pair<Device, std::unique_ptr<std::mutex>>> devices;
+        // Never destroyed: at the process's exit the CUDA runtime may be
+        // gone before static destructors would free the devices' buffers.
+        static auto* devices = new std::map<int, std::pair<Device, std::unique_ptr<std::mutex>>>;
         std::pair<Device, std::unique_ptr<std::mutex>>* entry = nullptr;
         {
             std::lock_guard<std::mutex> guard(table_lock);
-            auto found = devices.find(gpu);
-            if (found == devices.end()) {
+            auto found = devices->find(gpu);
+            if (found == devices->end()) {
                 const GpuInfo info = gpu_info(gpu);
                 if (!info.available) throw Error("device gpu: " + info.description);
-                found = devices.emplace(gpu, std::make_pair(Device::cuda(gpu), std::make_unique<std::mutex>())).first;
+                found = devices->emplace(gpu, std::make_pair(Device::cuda(gpu), std::make_unique<std::mutex>())).first;
             }
             entry = &found->second;
         }

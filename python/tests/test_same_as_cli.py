@@ -145,3 +145,16 @@ def test_a_missing_file_is_named_as_the_cli_names_it(cli, tmp_path):
     with pytest.raises(tetiso.Error) as raised:
         tetiso.read(tmp_path / "none.ply")
     assert done.returncode == 2 and done.stderr.strip() == "tetiso: " + str(raised.value)
+
+
+def test_devices_are_refused_as_the_cli_refuses_them(cli, tmp_path):
+    done = cli("extract", "--lattice", 8, "--device", "gpu", "-o", tmp_path / "x.ply", check=False)
+    if done.returncode == 0:
+        pytest.skip("this machine has a GPU")
+    with pytest.raises(tetiso.Error) as raised:
+        tetiso.extract_lattice(8, device="gpu")
+    assert done.stderr.strip() == "tetiso: --" + str(raised.value)     # "--device gpu: <why there is none>"
+    with pytest.raises(tetiso.Error, match=r"^device: 'tpu' is neither 'cpu' nor 'gpu'$"):
+        tetiso.extract_lattice(8, device="tpu")
+    with pytest.raises(tetiso.Error, match=r"^gpu: applies with device='gpu'; the work runs on the CPU$"):
+        tetiso.extract_lattice(8, gpu=1)
