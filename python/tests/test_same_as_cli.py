@@ -158,3 +158,28 @@ def test_devices_are_refused_as_the_cli_refuses_them(cli, tmp_path):
         tetiso.extract_lattice(8, device="tpu")
     with pytest.raises(tetiso.Error, match=r"^gpu: applies with device='gpu'; the work runs on the CPU$"):
         tetiso.extract_lattice(8, gpu=1)
+
+
+def test_a_seam_asks_a_python_function_which_domains_hold_an_edge():
+    lattice = tetiso.Lattice(20, 4)
+    a, b = lattice.piece(0), lattice.piece(1)
+    asked = []
+
+    def holders(low, high):
+        asked.append((low, high))
+        return lattice.domains_of_edge(low, high)
+
+    by_lattice = tetiso.seam(a, b, lattice=lattice, max_error=0.25 * lattice.spacing)
+    by_function = tetiso.seam(a, b, domains_of_edge=holders, max_error=0.25 * lattice.spacing)
+    assert asked and all(np.array_equal(getattr(by_lattice, name), getattr(by_function, name))
+                         for name in ("x", "y", "z", "keys", "flags", "triangles", "error"))
+    assert (by_lattice.flags & 1).any(), "edges shared with domains 2 and 3 stay locked"
+    settled_all = tetiso.seam(a, b, max_error=0.25 * lattice.spacing)    # neither: the last seam
+    assert not (settled_all.flags & 1).any()
+
+    def broken(low, high):
+        raise ValueError(f"no holders for {low}-{high}")
+    with pytest.raises(ValueError, match="^no holders for"):
+        tetiso.seam(a, b, domains_of_edge=broken)
+    with pytest.raises(tetiso.Error, match="^seam: give lattice or domains_of_edge, not both$"):
+        tetiso.seam(a, b, lattice=lattice, domains_of_edge=holders)
