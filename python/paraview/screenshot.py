@@ -7,8 +7,6 @@ tetrahedra), "tetiso reduced contour" at level 0.5, rendered by pvbatch.
 Debian's ParaView renders through X: xvfb-run gives it a virtual display
 (Mesa's software OpenGL), no GPU needed.
 """
-import os
-import runpy
 import sys
 
 import numpy as np
@@ -17,9 +15,11 @@ from vtkmodules.util import numpy_support
 from vtkmodules.vtkCommonDataModel import vtkImageData
 from vtkmodules.vtkFiltersGeneral import vtkDataSetTriangleFilter
 
+import tetiso
+
 N = 40
 out = sys.argv[1]
-runpy.run_path(os.path.join(os.path.dirname(os.path.abspath(__file__)), "load_tetiso_plugin.py"))
+tetiso.load_paraview_plugin()
 
 image = vtkImageData()
 image.SetDimensions(N, N, N)

@@ -14,7 +14,7 @@ from vtkmodules.util import numpy_support
 import tetiso
 
 loader, mesh = sys.argv[1], sys.argv[2]
-runpy.run_path(loader)
+runpy.run_path(loader)      # load_tetiso_plugin.py, as paraview --script runs it
 grid = XMLUnstructuredGridReader(FileName=[mesh])
 contour = simple.tetisoreducedcontour(Input=grid)   # the label, as paraview.simple names it
 for name in ("ContourBy", "Level", "Phi", "MaxError", "Reduce", "Threads"):

@@ -30,6 +30,29 @@ from ._tetiso import (  # noqa: E402
     seam,
 )
 
+
+
+def load_paraview_plugin():
+    """Loads the "tetiso reduced contour" filter (paraview_filter.py, beside
+    this file) into the ParaView whose Python runs this: the GUI (its Python
+    shell, or `paraview --script=python/paraview/load_tetiso_plugin.py`),
+    pvpython or pvbatch. It is then in the Filters menu and
+    paraview.simple.tetisoreducedcontour.
+
+    Debian 12's ParaView 5.11.0 cannot load any Python plugin by itself: its
+    decorator module (paraview.detail.pythonalgorithm) imports
+    inspect.getargspec, which Python 3.11 removed. It reads only the argument
+    names, which inspect.getfullargspec gives alike, so that is put in its
+    place where it is missing, before the plugin is loaded."""
+    import inspect
+
+    if not hasattr(inspect, "getargspec"):
+        inspect.getargspec = inspect.getfullargspec
+    from paraview.simple import LoadPlugin
+
+    LoadPlugin(_os.path.join(_os.path.dirname(_os.path.abspath(__file__)), "paraview_filter.py"), remote=False)
+
+
 __all__ = [
     "Error",
     "Lattice",
@@ -38,6 +61,7 @@ __all__ = [
     "extract",
     "extract_lattice",
     "have_self_intersections",
+    "load_paraview_plugin",
     "merge",
     "read",
     "reduce",

@@ -3,9 +3,11 @@ of an unstructured grid of tetrahedra, reduced by tetiso (marching
 tetrahedra, then rounds of parallel edge collapse and flip that keep every
 component's topology and every raw vertex within the error bound).
 
-Load it with Tools > Manage Plugins > Load New (or PV_PLUGIN_PATH, or
-LoadPlugin in pvpython/pvbatch); it needs `import tetiso` to work in
-ParaView's Python (the package installed, or PYTHONPATH=build/python).
+Loaded by tetiso.load_paraview_plugin() (Debian 12's ParaView needs what
+that function does first; elsewhere Tools > Manage Plugins > Load New, or
+PV_PLUGIN_PATH, load this file too). It needs `import tetiso` to work in
+ParaView's Python: the package installed, or PYTHONPATH=build/python. It is
+part of the package for that reason, and is not imported by it.
 
 The filter runs tetiso.extract on the grid it is given, as one domain: the
 same surface, to the byte, as `tetiso extract --mesh GRID.vtu --array NAME
