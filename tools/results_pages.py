@@ -485,6 +485,22 @@ def insitu(folder):
                                     f"{r['load_before']}, {r['date']}" for r in runs]))
 
 
+def python_binding(folder):
+    data = load(folder, "runs.json")
+    cases = {c["name"]: c for c in data["cases"]}
+    median = {name: statistics.median(c["seconds"]) for name, c in cases.items()}
+
+    def micro(seconds):
+        return f"{seconds * 1e6:,.2f}" if seconds < 1e-3 else f"{seconds * 1e6:,.0f}"
+    machine = data["machine"]
+    return dict(
+        data=data, median=median,
+        cases_table=table(["call", "median µs", "fastest µs", "calls per batch", "batches"],
+                          [[c["label"], micro(median[c["name"]]), micro(min(c["seconds"])), f"{c['calls_per_batch']:,}",
+                            len(c["seconds"])] for c in data["cases"]]),
+        machine=f"{machine['cpu_model']}, {machine['cpus']} CPUs, {machine['memory']}, {machine['kernel']}")
+
+
 PAGES = {
     "insitu": (insitu, "insitu", "insitu/README.md"),
     "paper-reproduction": (paper_reproduction, "paper-reproduction", "paper-reproduction.md"),
@@ -499,4 +515,5 @@ PAGES = {
     "mesh": (mesh, "mesh", "mesh/README.md"),
     "reduce": (reduce, "reduce", "reduce/README.md"),
     "extract": (extract, "extract", "extract/README.md"),
+    "python-binding": (python_binding, "python-binding", "python-binding/README.md"),
 }
