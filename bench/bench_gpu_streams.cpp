@@ -17,8 +17,10 @@
 //
 // Usage: bench_gpu_streams [--lattice=N] [--domains=D] [--count=M]
 //   [--pick=spread|first] [--streams=1,2,4,8,16] [--batches=1] [--cpu-threads=T]
-//   [--no-cpu] [--json=FILE]
-// Each K of --streams runs with each B of --batches.
+//   [--cpu-batches=1] [--no-cpu] [--json=FILE]
+// Each K of --streams runs with each B of --batches. On the CPU, B > 1 of
+// --cpu-batches extracts B domains and reduces their pieces in one host
+// reduce_batch (what run_domain_tasks would do if it batched on the host).
 // M domains of the N^3 lattice cut in D (spread: every D/M-th domain, so
 // that the sample holds the job's mix of empty and crossed domains; first:
 // domains 0..M-1). Writes one JSON object (stdout, or FILE) and a table to
@@ -60,6 +62,7 @@ struct Options {
     bool spread = true;
     std::vector<int> streams{1, 2, 4, 8, 16};
     std::vector<int> batches{1};
+    std::vector<int> cpu_batches{1};
     int cpu_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     bool cpu = true;
     std::string json;
@@ -90,8 +93,8 @@ Options parse(int argc, char** argv) {
         else if (name == "--no-cpu" && eq == std::string::npos) o.cpu = false;
         else if (name == "--json") o.json = value;
         else if (name == "--pick" && (value == "spread" || value == "first")) o.spread = value == "spread";
-        else if (name == "--streams" || name == "--batches") {
-            std::vector<int>& list = name == "--streams" ? o.streams : o.batches;
+        else if (name == "--streams" || name == "--batches" || name == "--cpu-batches") {
+            std::vector<int>& list = name == "--streams" ? o.streams : name == "--batches" ? o.batches : o.cpu_batches;
             list.clear();
             std::stringstream items(value);
             for (std::string item; std::getline(items, item, ',');)
@@ -127,6 +130,7 @@ struct Task {
     tetiso::ReduceOptions reduce;
     float level;
     int sample_rings;
+    bool host_batch = false; // on the host: extract each domain, then one reduce_batch
 
     // The domains' tasks in one call (a batch on a GPU).
     std::vector<tetiso::DomainTaskResult> run(const std::vector<int>& domains, const tetiso::Device& device) const {
@@ -134,7 +138,14 @@ struct Task {
         options.level = level;
         options.device = device;
         options.reduce = reduce;
+        if (host_batch && !device.is_gpu()) options.reduce.reset();
         std::vector<tetiso::DomainTaskResult> done = tetiso::run_domain_tasks(*partition, domains, options);
+        if (host_batch && !device.is_gpu()) {
+            std::vector<tetiso::Piece> pieces;
+            for (tetiso::DomainTaskResult& d : done) pieces.push_back(std::move(d.piece));
+            std::vector<tetiso::Piece> reduced = tetiso::reduce_batch(pieces, reduce);
+            for (std::size_t i = 0; i < done.size(); ++i) done[i].piece = std::move(reduced[i]);
+        }
         for (tetiso::DomainTaskResult& d : done) tetiso::keep_samples_near_locked(d.piece, sample_rings);
         return done;
     }
@@ -293,14 +304,18 @@ int main(int argc, char** argv) {
         // One thread per core, each a host Device doing one domain at a time
         // with one thread, as the job's CPU workers do.
         const std::vector<tetiso::Device> hosts(static_cast<std::size_t>(o.cpu_threads));
-        Row row{"cpu/threads:" + std::to_string(o.cpu_threads), 0, 1};
-        const Outcome cpu = run_threads(task, domains, hosts);
-        row.cold_s = row.warm_s = cpu.seconds;
-        all_same &= check(row.name.c_str(), cpu, reference, domains);
-        rows.push_back(row);
-        std::fprintf(stderr, "%s: %-16s         %7.3f s  %6.1f domains/s  %6.2f M raw triangles/s\n", kProgram,
-                     row.name.c_str(), row.warm_s, static_cast<double>(domains.size()) / row.warm_s,
-                     static_cast<double>(triangles_in) / row.warm_s / 1e6);
+        for (const int b : o.cpu_batches) {
+            Row row{"cpu/threads:" + std::to_string(o.cpu_threads) + (b > 1 ? "/batch:" + std::to_string(b) : ""), 0, b};
+            Task on_host = task;
+            on_host.host_batch = b > 1;
+            const Outcome cpu = run_threads(on_host, domains, hosts, b);
+            row.cold_s = row.warm_s = cpu.seconds;
+            all_same &= check(row.name.c_str(), cpu, reference, domains);
+            rows.push_back(row);
+            std::fprintf(stderr, "%s: %-24s         %7.3f s  %6.1f domains/s  %6.2f M raw triangles/s\n", kProgram,
+                         row.name.c_str(), row.warm_s, static_cast<double>(domains.size()) / row.warm_s,
+                         static_cast<double>(triangles_in) / row.warm_s / 1e6);
+        }
     }
 
     std::ostringstream json;

@@ -117,13 +117,13 @@ batch() {
     cat "$out/run.json"
     for t in test_reduce_gpu test_gpu_pipeline; do
         local start=$SECONDS
-        if timeout 150 "$bin/$t" --gtest_brief=1 >"$out/raw/$t.log" 2>&1; then echo "$t: passed ($((SECONDS - start)) s)"
+        if timeout 100 "$bin/$t" --gtest_brief=1 >"$out/raw/$t.log" 2>&1; then echo "$t: passed ($((SECONDS - start)) s)"
         else
             echo "$t: FAILED ($((SECONDS - start)) s)"
             grep -E "Failure|differ|error|FAILED|Expected|Which is" "$out/raw/$t.log" | head -30
         fi
     done
-    timeout 200 "$bin/bench_gpu_streams" "${args[@]}" --cpu-threads="$(nproc)" --json="$out/reduce_batch.json" \
+    timeout 170 "$bin/bench_gpu_streams" "${args[@]}" --cpu-threads="$(nproc)" --json="$out/reduce_batch.json" \
         2>&1 | tee "$out/reduce_batch.log"
     echo "bench_gpu_streams: exit ${PIPESTATUS[0]}"
     local best
@@ -134,10 +134,10 @@ print(max(r, key=lambda x: x['raw_triangles_per_s'])['batch'])" "$out/reduce_bat
     nsys=$(command -v nsys || ls /opt/nvidia/nsight-compute/*/host/target-linux-x64/nsys 2>/dev/null | head -1)
     if [ -n "$nsys" ]; then
         local rep=/tmp/batch_b$best prof=(--lattice=1000 --domains=1000 --count=64 --streams=1 --batches="$best" --no-cpu)
-        timeout 100 "$nsys" profile -t cuda -s none --cpuctxsw=none --gpu-metrics-devices=0 \
+        timeout 70 "$nsys" profile -t cuda -s none --cpuctxsw=none --gpu-metrics-devices=0 \
             --gpu-metrics-frequency=10000 -o "$rep" -f true "$bin/bench_gpu_streams" "${prof[@]}" \
             >"$out/raw/nsys.log" 2>&1 ||
-            timeout 100 "$nsys" profile -t cuda -s none --cpuctxsw=none -o "$rep" -f true \
+            timeout 70 "$nsys" profile -t cuda -s none --cpuctxsw=none -o "$rep" -f true \
                 "$bin/bench_gpu_streams" "${prof[@]}" >>"$out/raw/nsys.log" 2>&1
         local importer
         importer=$(find / -name QdstrmImporter -type f 2>/dev/null | head -1)
@@ -153,7 +153,7 @@ print(max(r, key=lambda x: x['raw_triangles_per_s'])['batch'])" "$out/reduce_bat
     fi
     if command -v ncu >/dev/null; then
         # The kernels of one batch's rounds, one at a time: their size, occupancy and throughput.
-        timeout 120 ncu --launch-skip 3000 --launch-count 150 --section Occupancy --section LaunchStats \
+        timeout 60 ncu --launch-skip 3000 --launch-count 150 --section Occupancy --section LaunchStats \
             --section SpeedOfLight --csv "$bin/bench_gpu_streams" --lattice=1000 --domains=1000 --count="$best" \
             --streams=1 --batches="$best" --no-cpu >"$out/raw/ncu_sample.csv" 2>"$out/raw/ncu_sample.log"
         echo "ncu: exit $?"

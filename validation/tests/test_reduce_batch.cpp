@@ -34,14 +34,14 @@ std::vector<Piece> mixed_pieces() {
 }
 
 // Each piece of the batch against the piece alone on the host; in the GPU
-// build the batch runs on the GPU too. Returns the rounds each piece took alone.
-std::vector<std::size_t> expect_batch_is_alone(const std::vector<Piece>& pieces, const ReduceOptions& o) {
+// build the batch runs on the GPU too. Returns each piece's report alone.
+std::vector<ReduceReport> expect_batch_is_alone(const std::vector<Piece>& pieces, const ReduceOptions& o) {
+    std::vector<ReduceReport> reports(pieces.size());
     std::vector<std::size_t> rounds;
     std::vector<Piece> alone;
-    for (const Piece& p : pieces) {
-        ReduceReport report;
-        alone.push_back(reduce(p, o, &report));
-        rounds.push_back(report.rounds.size());
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+        alone.push_back(reduce(pieces[i], o, &reports[i]));
+        rounds.push_back(reports[i].rounds.size());
     }
     std::vector<ReduceOptions> where{o};
 #ifdef TETISO_TEST_GPU
@@ -62,6 +62,12 @@ std::vector<std::size_t> expect_batch_is_alone(const std::vector<Piece>& pieces,
         for (std::size_t i = 0; i < std::min(batched.size(), pieces.size()); ++i)
             EXPECT_TRUE(same_piece(alone[i], batched[i])) << "piece " << i << " of " << pieces.size();
     }
+    return reports;
+}
+
+std::vector<std::size_t> rounds_of(const std::vector<ReduceReport>& reports) {
+    std::vector<std::size_t> rounds;
+    for (const ReduceReport& r : reports) rounds.push_back(r.rounds.size());
     return rounds;
 }
 
@@ -70,19 +76,25 @@ TEST(ReduceBatch, EveryPieceIsItselfAloneWhereverItStops) {
     for (const int threads : {1, 4}) {
         ReduceOptions o;
         o.threads = threads;
-        const std::vector<std::size_t> rounds = expect_batch_is_alone(pieces, o);
+        const std::vector<ReduceReport> reports = expect_batch_is_alone(pieces, o);
+        const std::vector<std::size_t> rounds = rounds_of(reports);
         // The batch holds pieces that stop at three or more different
-        // rounds, one of them round 0 (one round run), so that a piece that
-        // went on or stopped with the batch would show.
+        // rounds, one of them round 0 (one round run), and one that stops
+        // after two rounds of flips alone (its last round flipped): a piece
+        // that went on with the batch would flip further, one stopped with
+        // it would not have finished.
         EXPECT_EQ(rounds[1], 1u);
         EXPECT_GE(std::set<std::size_t>(rounds.begin(), rounds.end()).size(), 3u);
+        EXPECT_TRUE(std::any_of(reports.begin(), reports.end(), [](const ReduceReport& r) {
+            return r.rounds.size() >= 2 && r.rounds.back().collapses == 0 && r.rounds.back().flips > 0;
+        }));
     }
 }
 
 TEST(ReduceBatch, PiecesStoppedByMaxRoundsAndEarlierAreThemselves) {
     ReduceOptions o;
     o.max_rounds = 3;
-    const std::vector<std::size_t> rounds = expect_batch_is_alone(mixed_pieces(), o);
+    const std::vector<std::size_t> rounds = rounds_of(expect_batch_is_alone(mixed_pieces(), o));
     // Some piece ran into max_rounds (its report has max_rounds rounds),
     // others finished before it.
     EXPECT_EQ(*std::max_element(rounds.begin(), rounds.end()), 3u);
