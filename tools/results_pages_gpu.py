@@ -284,8 +284,42 @@ def reduce_batch(folder):
     syncs = re.search(r"([\d.]+) s\s+(\d+) calls\s+([\d.]+) us each\s+cudaStreamSynchronize", concurrency)
     dry_share = 100 * sum(ns for step, ns in groups.items() if step.startswith("dry runs")) / total
     cpu_batched = max(cpus, key=lambda r: r.get("batch", 1))
+    host = load(folder, "host_batch.json")
+    host_rows = {r.get("batch", 1): r for r in host["rows"] if r["streams"] == 0}
+    # Nsight Compute: the dry runs of the first rounds of the B = 64 batch, the longest four of each stage.
+    import csv
+    import io
+    with gzip.open(folder / "raw" / "ncu_b64.csv.gz", "rt") as f:
+        lines = list(csv.reader(io.StringIO(f.read())))
+    head = lines[0]
+    at = {name: head.index(name) for name in ("ID", "Kernel Name", "Metric Name", "Metric Value", "Metric Unit")}
+    metrics = {}
+    for line in lines[1:]:
+        kernel = metrics.setdefault(int(line[at["ID"]]), {"name": line[at["Kernel Name"]]})
+        value = line[at["Metric Value"]].replace(",", "")
+        if re.fullmatch(r"[\d.]+", value):
+            kernel[line[at["Metric Name"]]] = (float(value), line[at["Metric Unit"]])
+    scale = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
+
+    def stage(name):
+        return ("samples placed" if "for_each_heavy_kernel" in name else
+                "geometry (second stage)" if "for_each_of_heavy_kernel" in name else "placement and connectivity")
+    ncu_rows = []
+    for label in ("placement and connectivity", "geometry (second stage)", "samples placed"):
+        ks = sorted((k for k in metrics.values() if stage(k["name"]) == label),
+                    key=lambda k: -k["Duration"][0] * scale[k["Duration"][1]])[:4]
+        for k in sorted(ks, key=lambda k: -k["Duration"][0] * scale[k["Duration"][1]]):
+            ncu_rows.append([label, f"{k['Duration'][0] * scale[k['Duration'][1]]:.1f}", f"{k['Grid Size'][0]:,.0f}",
+                             f"{k['smsp__thread_inst_executed_per_inst_executed.ratio'][0]:.1f}",
+                             f"{k['Achieved Occupancy'][0]:.0f} %", f"{k['Compute (SM) Throughput'][0]:.0f} %",
+                             f"{k['DRAM Throughput'][0]:.0f} %",
+                             f"{k['l1tex__t_bytes_pipe_lsu_mem_local_op_ld.sum'][0] / 1e9:.0f} / "
+                             f"{k['l1tex__t_bytes_pipe_lsu_mem_local_op_st.sum'][0] / 1e9:.0f} GB"])
+    ncu = table(["dry-run stage", "ms", "blocks", "active threads per warp", "achieved occupancy", "SM throughput",
+                 "DRAM throughput", "local memory loads / stores"], ncu_rows)
     return dict(data=data, run=run, best=best, best_one_stream=best_one_stream, one=one, cpu=cpu,
-                cpu_batched=cpu_batched, busy=busy,
+                cpu_batched=cpu_batched, host=host, host_rows=host_rows, run_host=load(folder, "run_host_batch.json"),
+                run_ncu=load(folder, "run_ncu.json"), ncu=ncu, busy=busy,
                 issue=issue, dram=dram, sync_calls=int(syncs[2]), dry_share=dry_share, kernels=kernels,
                 concurrency=concurrency, batches=table(["K streams", "B domains a batch", "warm s", "cold s",
                                                         "domains/s", "raw triangles/s", "against K = 1, B = 1",
