@@ -56,8 +56,8 @@ DomainTaskResult run_domain_task(const Partition& partition, int domain, const D
 // options.batch_triangles), so that the fixed cost of a round is paid once
 // for a batch; elsewhere (the host, extraction only, a partition whose
 // pieces may be pinched) the domains run one after the other: on the host a
-// round's fixed cost is small beside its work, and the host's threads are
-// better spent on other domains' tasks. Each result's piece is byte for
+// round's fixed cost is small beside its work, and batching measured slower
+// there than one domain per thread (results/reduce-batch). Each result's piece is byte for
 // byte what run_domain_task gives for that domain alone; its seconds are its
 // extraction's and its share, by raw triangles, of its batch's reduction.
 // Throws tetiso::Error as run_domain_task does for the first domain that
