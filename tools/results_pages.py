@@ -9,7 +9,7 @@ from collections import Counter
 
 from render_results import (bench_provenance, bullets, figure, load, load_aggregates, plot_timeline, runs_provenance,
                             save, table, topology_summary)
-from results_pages_gpu import gpu_streams, hardware_comparison, reduce_gpu
+from results_pages_gpu import gpu_streams, hardware_comparison, reduce_batch, reduce_gpu
 
 
 def mega(value):
@@ -507,6 +507,7 @@ PAGES = {
     "hardware-comparison": (hardware_comparison, "hardware-comparison", "hardware-comparison/README.md"),
     "reduce-gpu": (reduce_gpu, "reduce-gpu", "reduce-gpu/README.md"),
     "gpu-streams": (gpu_streams, "gpu-streams", "gpu-streams/README.md"),
+    "reduce-batch": (reduce_batch, "reduce-batch", "reduce-batch/README.md"),
     "extract-gpu": (extract_gpu, "extract-gpu", "extract-gpu/README.md"),
     "scale": (scale, "scale", "scale/README.md"),
     "fuzz": (fuzz, "fuzz", "fuzz/README.md"),

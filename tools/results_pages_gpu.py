@@ -275,3 +275,94 @@ def gpu_streams(folder):
                 cpu=next(r for r in data["rows"] if r["streams"] == 0),
                 streams=table(["K streams", "warm s", "cold s", "domains/s", "raw triangles/s", "per-task latency",
                                "buffers held", "GPU memory used", "host CPU"], rows))
+
+
+def reduce_batch(folder):
+    """bench_gpu_streams --batches: B domains' pieces reduced side by side, on K streams."""
+    data, run = load(folder, "reduce_batch.json"), load(folder, "run.json")
+    gpus = [r for r in data["rows"] if r["streams"] > 0]
+    cpu = next(r for r in data["rows"] if r["streams"] == 0)
+    one = next(r for r in gpus if r["streams"] == 1 and r["batch"] == 1)
+    best = max(gpus, key=lambda r: r["raw_triangles_per_s"])
+    best_one_stream = max((r for r in gpus if r["streams"] == 1), key=lambda r: r["raw_triangles_per_s"])
+    rows = [[r["streams"], r["batch"], f"{r['warm_s']:.2f}", f"{r['cold_s']:.2f}", f"{r['domains_per_s']:.1f}",
+             f"{r['raw_triangles_per_s'] / 1e6:.2f} M", f"{r['raw_triangles_per_s'] / one['raw_triangles_per_s']:.2f}×",
+             f"{r['buffer_bytes'] / 2**20:,.0f} MiB", f"{r['device_used_bytes'] / 2**20:,.0f} MiB"] for r in gpus]
+    cpus = [r for r in data["rows"] if r["streams"] == 0]
+    rows += [[f"CPU, {r['name'].split(':')[1].split('/')[0]} threads", r.get("batch", 1), f"{r['warm_s']:.2f}", "",
+              f"{r['domains_per_s']:.1f}", f"{r['raw_triangles_per_s'] / 1e6:.2f} M",
+              f"{r['raw_triangles_per_s'] / one['raw_triangles_per_s']:.2f}×", "", ""] for r in cpus]
+    # nsys: the GPU time of the trace by kernel, grouped by the step of the round it serves.
+    groups = Counter()
+    total = 0
+    with open(folder / "raw" / "nsys_cuda_gpu_kern_sum.csv") as f:
+        header = f.readline()
+        assert header.startswith("Time (%),Total Time (ns)")
+        for line in f:
+            nanoseconds = int(line.split(",")[1])
+            name = line.split('"')[1] if '"' in line else line.rsplit(",", 1)[1]
+            total += nanoseconds
+            if "dry_run_all" in name and "for_each_heavy_kernel" in name:
+                step = "dry runs: the samples of the leaves placed, one a thread"
+            elif "dry_run_all" in name and "for_each_of_heavy_kernel" in name:
+                step = "dry runs: geometry of the collapses that passed the first stage"
+            elif "dry_run_all" in name:
+                step = "dry runs: placement and connectivity of every candidate (first stage)"
+            elif "marching" in name or "DeviceScanKernel" in name:
+                step = "extraction (marching tetrahedra, its scans)"
+            elif "choose_by_reservations" in name or "claim_chosen" in name:
+                step = "the choice by reservations"
+            elif "order_fans" in name or "build_fans" in name or "group_by_key" in name:
+                step = "fans (grouping and ordering)"
+            else:
+                step = "everything else (edges, geometry, cones, classification, sorts, apply, compaction, samples' sort)"
+            groups[step] += nanoseconds
+    kernels = table(["step", "GPU time", "share"], [[step, f"{ns / 1e9:.3f} s", f"{100 * ns / total:.1f} %"]
+                                                    for step, ns in groups.most_common()])
+    concurrency = (folder / "raw" / "nsys_concurrency.txt").read_text()
+    busy = float(re.search(r"device busy .*?: ([\d.]+)%", concurrency)[1])
+    issue = float(re.search(r"([\d.]+)\s+SM Issue", concurrency)[1])
+    dram = float(re.search(r"([\d.]+)\s+DRAM Read", concurrency)[1])
+    syncs = re.search(r"([\d.]+) s\s+(\d+) calls\s+([\d.]+) us each\s+cudaStreamSynchronize", concurrency)
+    dry_share = 100 * sum(ns for step, ns in groups.items() if step.startswith("dry runs")) / total
+    cpu_batched = max(cpus, key=lambda r: r.get("batch", 1))
+    host = load(folder, "host_batch.json")
+    host_rows = {r.get("batch", 1): r for r in host["rows"] if r["streams"] == 0}
+    # Nsight Compute: the dry runs of the first rounds of the B = 64 batch, the longest four of each stage.
+    import csv
+    import io
+    with gzip.open(folder / "raw" / "ncu_b64.csv.gz", "rt") as f:
+        lines = list(csv.reader(io.StringIO(f.read())))
+    head = lines[0]
+    at = {name: head.index(name) for name in ("ID", "Kernel Name", "Metric Name", "Metric Value", "Metric Unit")}
+    metrics = {}
+    for line in lines[1:]:
+        kernel = metrics.setdefault(int(line[at["ID"]]), {"name": line[at["Kernel Name"]]})
+        value = line[at["Metric Value"]].replace(",", "")
+        if re.fullmatch(r"[\d.]+", value):
+            kernel[line[at["Metric Name"]]] = (float(value), line[at["Metric Unit"]])
+    scale = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
+
+    def stage(name):
+        return ("samples placed" if "for_each_heavy_kernel" in name else
+                "geometry (second stage)" if "for_each_of_heavy_kernel" in name else "placement and connectivity")
+    ncu_rows = []
+    for label in ("placement and connectivity", "geometry (second stage)", "samples placed"):
+        ks = sorted((k for k in metrics.values() if stage(k["name"]) == label),
+                    key=lambda k: -k["Duration"][0] * scale[k["Duration"][1]])[:4]
+        for k in sorted(ks, key=lambda k: -k["Duration"][0] * scale[k["Duration"][1]]):
+            ncu_rows.append([label, f"{k['Duration'][0] * scale[k['Duration'][1]]:.1f}", f"{k['Grid Size'][0]:,.0f}",
+                             f"{k['smsp__thread_inst_executed_per_inst_executed.ratio'][0]:.1f}",
+                             f"{k['Achieved Occupancy'][0]:.0f} %", f"{k['Compute (SM) Throughput'][0]:.0f} %",
+                             f"{k['DRAM Throughput'][0]:.0f} %",
+                             f"{k['l1tex__t_bytes_pipe_lsu_mem_local_op_ld.sum'][0] / 1e9:.0f} / "
+                             f"{k['l1tex__t_bytes_pipe_lsu_mem_local_op_st.sum'][0] / 1e9:.0f} GB"])
+    ncu = table(["dry-run stage", "ms", "blocks", "active threads per warp", "achieved occupancy", "SM throughput",
+                 "DRAM throughput", "local memory loads / stores"], ncu_rows)
+    return dict(data=data, run=run, best=best, best_one_stream=best_one_stream, one=one, cpu=cpu,
+                cpu_batched=cpu_batched, host=host, host_rows=host_rows, run_host=load(folder, "run_host_batch.json"),
+                run_ncu=load(folder, "run_ncu.json"), ncu=ncu, busy=busy,
+                issue=issue, dram=dram, sync_calls=int(syncs[2]), dry_share=dry_share, kernels=kernels,
+                concurrency=concurrency, batches=table(["K streams", "B domains a batch", "warm s", "cold s",
+                                                        "domains/s", "raw triangles/s", "against K = 1, B = 1",
+                                                        "buffers held", "GPU memory used"], rows))
