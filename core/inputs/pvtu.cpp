@@ -18,6 +18,8 @@
 #include "io_formats.hpp"
 #include "mapped_file.hpp"
 #include "merge_tree.hpp"
+#include "pvtu_overlaps.hpp"
+#include "tet_faces.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/io_vtu.hpp"
 #include "tetiso/mesh_split.hpp"
@@ -92,61 +94,6 @@ LoadedPiece load_piece(std::string_view bytes, const std::filesystem::path& path
     return piece;
 }
 
-// Calls found(u, v, w, t) for every face of `tets` that only one
-// tetrahedron, t, has. Faces are bucketed by their smallest corner (a counting sort) and
-// each bucket, a dozen faces or so, sorted on its own: for 23 M faces this
-// is several times faster than sorting them all.
-template <class Found>
-void for_each_boundary_face(const std::vector<std::int32_t>& tets, std::size_t nodes, Found found) {
-    const std::size_t count = tets.size() / 4;
-    std::vector<std::int64_t> first(nodes + 1, 0);
-    const auto face = [&](std::size_t t, int skip, std::int32_t (&f)[3]) {
-        int k = 0;
-        for (int c = 0; c < 4; ++c)
-            if (c != skip) f[k++] = tets[4 * t + static_cast<std::size_t>(c)];
-        if (f[0] > f[1]) std::swap(f[0], f[1]);
-        if (f[1] > f[2]) std::swap(f[1], f[2]);
-        if (f[0] > f[1]) std::swap(f[0], f[1]);
-    };
-    for (std::size_t t = 0; t < count; ++t)
-        for (int skip = 0; skip < 4; ++skip) {
-            std::int32_t f[3];
-            face(t, skip, f);
-            ++first[static_cast<std::size_t>(f[0]) + 1];
-        }
-    for (std::size_t v = 0; v < nodes; ++v) first[v + 1] += first[v];
-    struct Rest {
-        std::uint64_t corners; // (middle, largest) corner of the face
-        std::uint32_t tet;     // the tetrahedron it is a face of
-    };
-    std::vector<Rest> rest(4 * count);
-    {
-        std::vector<std::int64_t> fill(first.begin(), first.end() - 1);
-        for (std::size_t t = 0; t < count; ++t)
-            for (int skip = 0; skip < 4; ++skip) {
-                std::int32_t f[3];
-                face(t, skip, f);
-                rest[static_cast<std::size_t>(fill[static_cast<std::size_t>(f[0])]++)] = {
-                    static_cast<std::uint64_t>(f[1]) << 32 | static_cast<std::uint32_t>(f[2]), static_cast<std::uint32_t>(t)};
-            }
-    }
-    // Only the order of different faces matters: a face found twice is
-    // interior and skipped, whichever tetrahedron comes first.
-    const auto by_corners = [](const Rest& a, const Rest& b) { return a.corners < b.corners; };
-    for (std::size_t v = 0; v < nodes; ++v) {
-        const auto begin = rest.begin() + first[v], end = rest.begin() + first[v + 1];
-        std::sort(begin, end, by_corners);
-        for (auto i = begin; i != end;) {
-            auto j = i + 1;
-            while (j != end && j->corners == i->corners) ++j;
-            if (j - i == 1)
-                found(static_cast<std::int32_t>(v), static_cast<std::int32_t>(i->corners >> 32),
-                      static_cast<std::int32_t>(i->corners & 0xffffffffu), static_cast<std::size_t>(i->tet));
-            i = j;
-        }
-    }
-}
-
 // How far the copies of one shared node may lie apart, as a fraction of the
 // mesh's mean edge length; and how many units of float rounding (of the
 // larger magnitude) any two copies of a coordinate or a value may differ by.
@@ -176,9 +123,6 @@ std::string full_precision(double value) {
     return text;
 }
 
-// A tetrahedron by its four global node ids, sorted.
-using TetIds = std::array<GlobalId, 4>;
-
 // A node on a piece's boundary, as the scan records it.
 struct BoundaryNode {
     GlobalId id;
@@ -200,8 +144,10 @@ struct PieceScan {
     std::vector<BoundaryNode> nodes;
     std::vector<std::pair<EdgeKey, int>> edges;
     // The tetrahedra with a face on the boundary, each as its sorted node
-    // ids: two pieces that hold one tetrahedron overlap (see the check).
-    std::vector<TetIds> boundary_tets;
+    // ids: two pieces that hold one tetrahedron overlap (pvtu_overlaps.hpp).
+    std::vector<detail::BoundaryTet> boundary_tets;
+    // Kept by the rank that scanned it, not sent: what lies inside the piece.
+    detail::PieceInside inside;
     std::string error;
 };
 
@@ -212,8 +158,8 @@ PieceScan scan_piece(const std::filesystem::path& path, const MeshSource& source
         const detail::MappedFile file(path);
         const std::string_view bytes = file.bytes();
         scan.digest = split_digest(bytes.data(), bytes.size());
-        const LoadedPiece piece = load_piece(bytes, path, source, ids_name, several);
-        const MeshArrays& a = piece.arrays;
+        LoadedPiece piece = load_piece(bytes, path, source, ids_name, several);
+        MeshArrays& a = piece.arrays;
         const std::size_t tets = a.tets.size() / 4;
         scan.tets = static_cast<std::int64_t>(tets);
         scan.used = static_cast<std::int64_t>(piece.used.size());
@@ -228,20 +174,38 @@ PieceScan scan_piece(const std::filesystem::path& path, const MeshSource& source
                     const double dz = static_cast<float>(a.z[u]) - static_cast<double>(static_cast<float>(a.z[v]));
                     scan.edge_sum += std::sqrt(dx * dx + dy * dy + dz * dz);
                 }
+        // Oriented as a task orients them (over float positions), so that a
+        // piece whose tetrahedra overlap is refused here, before any task.
+        const detail::TetNames names{&a.tet_numbers, a.number_word};
+        const std::vector<std::uint8_t> listed_negative = detail::orient_each(
+            a.tets,
+            [&a](std::int32_t p, std::int32_t q, std::int32_t r, std::int32_t s) {
+                return detail::volume6([&a](std::int32_t v, int axis) {
+                    const auto i = static_cast<std::size_t>(v);
+                    return static_cast<double>(static_cast<float>(axis == 0 ? a.x[i] : axis == 1 ? a.y[i] : a.z[i]));
+                }, p, q, r, s);
+            },
+            path.string(), names);
         std::vector<std::int32_t> on_boundary;
-        for_each_boundary_face(a.tets, a.x.size(), [&](std::int32_t u, std::int32_t v, std::int32_t w, std::size_t t) {
-            TetIds tet;
-            for (int k = 0; k < 4; ++k) tet[static_cast<std::size_t>(k)] = a.ids[static_cast<std::size_t>(a.tets[4 * t + static_cast<std::size_t>(k)])];
-            std::sort(tet.begin(), tet.end());
-            scan.boundary_tets.push_back(tet);
-            const std::int32_t f[3] = {u, v, w};
-            for (int e = 0; e < 3; ++e) {
-                const GlobalId g = a.ids[static_cast<std::size_t>(f[e])];
-                const GlobalId h = a.ids[static_cast<std::size_t>(f[(e + 1) % 3])];
-                scan.edges.push_back({edge_key(g, h), p});
-                on_boundary.push_back(f[e]);
-            }
-        });
+        std::vector<std::array<std::int32_t, 3>> boundary_faces;
+        const detail::FaceClash clash =
+            detail::face_pass(a.tets, a.x.size(), [&](std::int32_t u, std::int32_t v, std::int32_t w, std::size_t t) {
+                detail::BoundaryTet tet{{}, a.tet_numbers.empty() ? t : a.tet_numbers[t]};
+                for (int k = 0; k < 4; ++k)
+                    tet.ids[static_cast<std::size_t>(k)] = a.ids[static_cast<std::size_t>(a.tets[4 * t + static_cast<std::size_t>(k)])];
+                std::sort(tet.ids.begin(), tet.ids.end());
+                scan.boundary_tets.push_back(tet);
+                boundary_faces.push_back({u, v, w});
+                const std::int32_t f[3] = {u, v, w};
+                for (int e = 0; e < 3; ++e) {
+                    const GlobalId g = a.ids[static_cast<std::size_t>(f[e])];
+                    const GlobalId h = a.ids[static_cast<std::size_t>(f[(e + 1) % 3])];
+                    scan.edges.push_back({edge_key(g, h), p});
+                    on_boundary.push_back(f[e]);
+                }
+            });
+        detail::refuse_clash(clash, listed_negative, path.string(), names);
+        if (several) scan.inside = detail::piece_inside(a.tets, a.ids, piece.used, boundary_faces);
         std::sort(scan.edges.begin(), scan.edges.end());
         scan.edges.erase(std::unique(scan.edges.begin(), scan.edges.end()), scan.edges.end());
         std::sort(scan.boundary_tets.begin(), scan.boundary_tets.end());
@@ -257,6 +221,34 @@ PieceScan scan_piece(const std::filesystem::path& path, const MeshSource& source
         scan.error = e.what();
     }
     return scan;
+}
+
+// Pieces that share no node id with the rest are legal (a mesh of several
+// bodies) but more often pieces numbered apart by mistake, whose surfaces
+// would meet open where they touch: said in a note, not refused.
+template <class Root>
+std::string unjoined_pieces(const MeshSource& source, const std::vector<std::filesystem::path>& pieces, Root root) {
+    std::vector<std::vector<int>> groups(pieces.size());
+    for (int p = 0; p < static_cast<int>(pieces.size()); ++p) groups[static_cast<std::size_t>(root(p))].push_back(p);
+    groups.erase(std::remove_if(groups.begin(), groups.end(), [](const std::vector<int>& g) { return g.empty(); }), groups.end());
+    if (groups.size() < 2) return {};
+    std::string list;
+    for (std::size_t g = 0; g < groups.size() && g < 4; ++g) {
+        const std::vector<int>& members = groups[g];
+        list += g == 0 ? "" : "; ";
+        if (members.size() == 1) {
+            list += "piece " + std::to_string(members[0]) + " (" + pieces[static_cast<std::size_t>(members[0])].string() + ")";
+        } else {
+            list += "pieces " + std::to_string(members[0]);
+            for (std::size_t m = 1; m < members.size() && m < 4; ++m) list += ", " + std::to_string(members[m]);
+            list += members.size() > 4 ? " and " + std::to_string(members.size() - 4) + " more" : "";
+        }
+    }
+    if (groups.size() > 4) list += "; and " + std::to_string(groups.size() - 4) + " more groups";
+    return source.path.string() + ": the pieces fall into " + std::to_string(groups.size()) +
+           " groups that share no node id (" + list +
+           "): their surfaces are not joined; if the groups touch, the node ids are not global "
+           "(name the right array with --node-ids)";
 }
 
 // A rank's scans as bytes for RankGroup::all_gather, and back.
@@ -311,9 +303,13 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
         index_error = e.what();
     }
     std::vector<PieceScan> scans(pieces_.size());
+    std::vector<std::pair<int, detail::PieceInside>> inside; // of this rank's pieces
+    for (auto& [p, scan] : mine) inside.emplace_back(p, std::move(scan.inside));
+    const auto gather = [&group](const std::string& share) {
+        return group.all_gather ? group.all_gather(share) : std::vector<std::string>{share};
+    };
     {
-        const std::vector<std::string> shares =
-            group.all_gather ? group.all_gather(pack(index_error, mine)) : std::vector<std::string>{pack(index_error, mine)};
+        const std::vector<std::string> shares = gather(pack(index_error, mine));
         std::vector<std::pair<int, PieceScan>>().swap(mine);
         std::string first_error;
         for (const std::string& share : shares) {
@@ -333,7 +329,7 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
                 scan.error.assign(piece_error.begin(), piece_error.end());
                 scan.nodes = in.get_array<BoundaryNode>();
                 for (const EdgeKey key : in.get_array<EdgeKey>()) scan.edges.push_back({key, static_cast<int>(p)});
-                scan.boundary_tets = in.get_array<TetIds>();
+                scan.boundary_tets = in.get_array<detail::BoundaryTet>();
             }
         }
         if (!first_error.empty()) throw Error(first_error);
@@ -343,26 +339,37 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
     }
     const int parts = static_cast<int>(pieces_.size());
 
-    // Pieces that overlap (one listed twice, under two names, or holding the
-    // whole mesh each, as VTK writes an unstreamed grid in several pieces;
-    // cells shared but not marked as ghosts) hold a tetrahedron of the one's
-    // boundary in the other too; where that one is on both boundaries it is
-    // found here, before any task. Those on one boundary only are not.
+    // Pieces that overlap (one listed twice, under two names, inside another
+    // or holding the whole mesh each, as VTK writes an unstreamed grid in
+    // several pieces; cells shared but not marked as ghosts), before any
+    // task: a tetrahedron on the boundary of both, then one on the boundary
+    // of one that reaches inside the other, which each rank looks for in its
+    // own pieces; the first in the pieces' order is named, for any number
+    // of ranks.
     {
-        std::vector<std::pair<TetIds, int>> held;
-        for (int p = 0; p < static_cast<int>(scans.size()); ++p)
-            for (const TetIds& tet : scans[static_cast<std::size_t>(p)].boundary_tets) held.push_back({tet, p});
-        std::sort(held.begin(), held.end());
-        for (std::size_t i = 1; i < held.size(); ++i)
-            if (held[i].first == held[i - 1].first) {
-                const TetIds& t = held[i].first;
-                throw Error(pieces_[static_cast<std::size_t>(held[i].second)].string() +
-                            ": the tetrahedron of node ids " + std::to_string(t[0]) + ", " + std::to_string(t[1]) +
-                            ", " + std::to_string(t[2]) + ", " + std::to_string(t[3]) + " is also in " +
-                            pieces_[static_cast<std::size_t>(held[i - 1].second)].string() +
-                            ": pieces overlap (a cell two pieces hold must be a ghost, vtkGhostType, in all but one)");
+        std::vector<std::vector<detail::BoundaryTet>> boundary(scans.size());
+        for (std::size_t p = 0; p < scans.size(); ++p) boundary[p] = std::move(scans[p].boundary_tets);
+        detail::refuse_shared_boundary_tets(boundary, pieces_);
+        if (pieces_.size() > 1) {
+            const detail::InsideOverlap mine_found = detail::find_inside_overlap(inside, boundary, pieces_);
+            detail::ByteWriter<std::string> out;
+            out.put(mine_found.piece), out.put(mine_found.tet), out.put(mine_found.other);
+            out.put_array(std::vector<char>(mine_found.message.begin(), mine_found.message.end()));
+            detail::InsideOverlap first;
+            for (const std::string& share : gather(std::move(out.bytes))) {
+                detail::ByteReader in = unpacker(share);
+                detail::InsideOverlap found;
+                found.piece = in.get<std::int64_t>(), found.tet = in.get<std::uint64_t>(), found.other = in.get<std::int64_t>();
+                const auto message = in.get_array<char>();
+                found.message.assign(message.begin(), message.end());
+                if (!found.message.empty() &&
+                    (first.message.empty() || std::tie(found.piece, found.tet, found.other) < std::tie(first.piece, first.tet, first.other)))
+                    first = std::move(found);
             }
+            if (!first.message.empty()) throw Error(first.message);
+        }
     }
+    std::vector<std::pair<int, detail::PieceInside>>().swap(inside);
 
     std::vector<std::int64_t> part_tets(pieces_.size());
     std::vector<std::pair<EdgeKey, int>> boundary_edges;
@@ -394,9 +401,19 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
     const auto describe = [&](const BoundaryNode& n) {
         return "(" + full_precision(n.x) + ", " + full_precision(n.y) + ", " + full_precision(n.z) + ")";
     };
+    std::vector<int> group_of(pieces_.size()); // pieces joined by shared nodes (union-find)
+    std::iota(group_of.begin(), group_of.end(), 0);
+    const auto root = [&group_of](int p) {
+        while (group_of[static_cast<std::size_t>(p)] != p) p = group_of[static_cast<std::size_t>(p)] = group_of[static_cast<std::size_t>(group_of[static_cast<std::size_t>(p)])];
+        return p;
+    };
     for (std::size_t i = 0; i < boundary_nodes.size();) {
         std::size_t j = i + 1;
         while (j < boundary_nodes.size() && boundary_nodes[j].id == boundary_nodes[i].id) ++j;
+        for (std::size_t k = i + 1; k < j; ++k) {
+            const int a = root(boundary_nodes[i].piece), b = root(boundary_nodes[k].piece);
+            group_of[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+        }
         if (j - i > 1) {
             const auto smallest = [](const BoundaryNode& a, const BoundaryNode& b) {
                 return std::make_tuple(ordered(a.x), ordered(a.y), ordered(a.z), ordered(a.f)) <
@@ -428,6 +445,10 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
         i = j;
     }
     std::vector<BoundaryNode>().swap(boundary_nodes);
+    if (std::string note = unjoined_pieces(source, pieces_, [&root](int p) { return root(p); }); !note.empty()) {
+        if (group.rank == 0) std::fprintf(stderr, "tetiso: note: %s\n", note.c_str());
+        notes_.push_back(std::move(note));
+    }
 
     // Shared edges, the pieces' adjacency and the tree.
     detail::PairWeights weights;
