@@ -146,6 +146,9 @@ struct PieceScan {
     // The tetrahedra with a face on the boundary, each as its sorted node
     // ids: two pieces that hold one tetrahedron overlap (pvtu_overlaps.hpp).
     std::vector<detail::BoundaryTet> boundary_tets;
+    // Its boundary faces by node ids, each with the side its tetrahedron
+    // lies on: two pieces on one side of a face fold over each other.
+    std::vector<detail::BoundaryFace> faces;
     // Kept by the rank that scanned it, not sent: what lies inside the piece.
     detail::PieceInside inside;
     std::string error;
@@ -196,6 +199,8 @@ PieceScan scan_piece(const std::filesystem::path& path, const MeshSource& source
                 std::sort(tet.ids.begin(), tet.ids.end());
                 scan.boundary_tets.push_back(tet);
                 boundary_faces.push_back({u, v, w});
+                scan.faces.push_back(detail::boundary_face(a.tets.data() + 4 * t, {u, v, w}, a.ids,
+                                                           tet.cell));
                 const std::int32_t f[3] = {u, v, w};
                 for (int e = 0; e < 3; ++e) {
                     const GlobalId g = a.ids[static_cast<std::size_t>(f[e])];
@@ -274,6 +279,7 @@ std::string pack(const std::string& error, const std::vector<std::pair<int, Piec
         for (const auto& edge : scan.edges) keys.push_back(edge.first);
         out.put_array(keys);
         out.put_array(scan.boundary_tets);
+        out.put_array(scan.faces);
     }
     return std::move(out.bytes);
 }
@@ -330,6 +336,7 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
                 scan.nodes = in.get_array<BoundaryNode>();
                 for (const EdgeKey key : in.get_array<EdgeKey>()) scan.edges.push_back({key, static_cast<int>(p)});
                 scan.boundary_tets = in.get_array<detail::BoundaryTet>();
+                scan.faces = in.get_array<detail::BoundaryFace>();
             }
         }
         if (!first_error.empty()) throw Error(first_error);
@@ -350,6 +357,11 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
         std::vector<std::vector<detail::BoundaryTet>> boundary(scans.size());
         for (std::size_t p = 0; p < scans.size(); ++p) boundary[p] = std::move(scans[p].boundary_tets);
         detail::refuse_shared_boundary_tets(boundary, pieces_);
+        {
+            std::vector<std::vector<detail::BoundaryFace>> faces(scans.size());
+            for (std::size_t p = 0; p < scans.size(); ++p) faces[p] = std::move(scans[p].faces);
+            detail::refuse_folds_between(faces, pieces_);
+        }
         if (pieces_.size() > 1) {
             const detail::InsideOverlap mine_found = detail::find_inside_overlap(inside, boundary, pieces_);
             detail::ByteWriter<std::string> out;

@@ -57,6 +57,56 @@ PieceInside piece_inside(const std::vector<std::int32_t>& tets, const std::vecto
     return inside;
 }
 
+BoundaryFace boundary_face(const std::int32_t* corners, const std::array<std::int32_t, 3>& face,
+                           const std::vector<GlobalId>& ids, std::uint64_t cell) {
+    // The target order: the face's corners by id, then the one it lacks.
+    std::array<std::int32_t, 4> target{face[0], face[1], face[2], 0};
+    std::sort(target.begin(), target.begin() + 3, [&ids](std::int32_t a, std::int32_t b) {
+        return ids[static_cast<std::size_t>(a)] < ids[static_cast<std::size_t>(b)];
+    });
+    for (int k = 0; k < 4; ++k)
+        if (std::find(face.begin(), face.end(), corners[k]) == face.end()) target[3] = corners[k];
+    int position[4];
+    for (int k = 0; k < 4; ++k)
+        position[k] = static_cast<int>(std::find(target.begin(), target.end(), corners[k]) - target.begin());
+    std::uint32_t odd = 0;
+    for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j) odd ^= position[i] > position[j] ? 1u : 0u;
+    BoundaryFace out{{}, odd, cell};
+    for (int k = 0; k < 3; ++k)
+        out.ids[static_cast<std::size_t>(k)] = static_cast<std::uint32_t>(ids[static_cast<std::size_t>(target[static_cast<std::size_t>(k)])]);
+    return out;
+}
+
+void refuse_folds_between(const std::vector<std::vector<BoundaryFace>>& faces,
+                          const std::vector<std::filesystem::path>& pieces) {
+    std::vector<std::pair<BoundaryFace, int>> held;
+    for (std::size_t p = 0; p < faces.size(); ++p)
+        for (const BoundaryFace& face : faces[p]) held.push_back({face, static_cast<int>(p)});
+    std::sort(held.begin(), held.end(), [](const auto& a, const auto& b) {
+        return std::tie(a.first.ids, a.second) < std::tie(b.first.ids, b.second);
+    });
+    for (std::size_t i = 0; i < held.size();) {
+        std::size_t j = i + 1;
+        while (j < held.size() && held[j].first.ids == held[i].first.ids) ++j;
+        const auto name = [&](std::size_t k) {
+            return pieces[static_cast<std::size_t>(held[k].second)].string() + " (cell " + std::to_string(held[k].first.cell) + ")";
+        };
+        const FaceIds& f = held[i].first.ids;
+        const std::string face = "the face of node ids " + std::to_string(f[0]) + ", " + std::to_string(f[1]) + ", " + std::to_string(f[2]);
+        if (j - i > 2)
+            throw Error(pieces[static_cast<std::size_t>(held[i + 2].second)].string() + ": " + face + " is on the boundary of " +
+                        name(i) + ", " + name(i + 1) + " and " + name(i + 2) + kGhostHint);
+        if (j - i == 2 && held[i].first.side == held[i + 1].first.side)
+            throw Error(pieces[static_cast<std::size_t>(held[i + 1].second)].string() + ": cell " +
+                        std::to_string(held[i + 1].first.cell) + " lies on the same side of " + face + " as cell " +
+                        std::to_string(held[i].first.cell) + " of " + pieces[static_cast<std::size_t>(held[i].second)].string() +
+                        ", its neighbour across it, so the two overlap: the mesh is tangled where it crosses from one "
+                        "piece into the other");
+        i = j;
+    }
+}
+
 void refuse_shared_boundary_tets(const std::vector<std::vector<BoundaryTet>>& boundary,
                                  const std::vector<std::filesystem::path>& pieces) {
     std::vector<std::pair<BoundaryTet, int>> held;

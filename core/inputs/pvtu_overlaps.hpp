@@ -38,6 +38,29 @@ struct BoundaryTet {
 // A face by its three global node ids, sorted (ids are below 2^32).
 using FaceIds = std::array<std::uint32_t, 3>;
 
+// A boundary face by its node ids, sorted, the side its tetrahedron lies
+// on (the parity of the permutation from the tetrahedron's corners, oriented
+// positively, to the face's sorted corners and the corner it lacks) and that
+// tetrahedron's cell. The pieces on either side of a face they share give it
+// opposite sides; the same side is a fold between them, where a tangled mesh
+// crosses from one piece into another.
+struct BoundaryFace {
+    FaceIds ids;
+    std::uint32_t side;
+    std::uint64_t cell;
+};
+
+// The boundary face (u, v, w) of the positively oriented tetrahedron
+// `corners` (point indices), with its cell number.
+BoundaryFace boundary_face(const std::int32_t* corners, const std::array<std::int32_t, 3>& face,
+                           const std::vector<GlobalId>& ids, std::uint64_t cell);
+
+// Throws tetiso::Error where two pieces lie on the same side of a face they
+// share, or three pieces share a face, naming the face, the pieces and the
+// cells. `faces[p]`: piece p's boundary faces.
+void refuse_folds_between(const std::vector<std::vector<BoundaryFace>>& faces,
+                          const std::vector<std::filesystem::path>& pieces);
+
 // What a piece keeps of its inside for the check against the others'
 // boundaries: the ids of its nodes on no boundary face, and its faces of
 // two tetrahedra whose corners all lie on its boundary (a face with a

@@ -260,6 +260,23 @@ TEST(MeshOverlaps, APieceInsideAnotherIsRefusedOnEveryRank) {
     }
 }
 
+// A tangle across the boundary between pieces: each piece is sound alone,
+// but the tetrahedra on either side of the face they share lie on one side.
+TEST(MeshOverlaps, PiecesThatFoldOverEachOtherAreRefused) {
+    const Pieces pieces;
+    for (const int size : {1, 2})
+        for (const std::string& e : on_ranks(pieces.source({{"a.vtu", piece({{0, 1, 2, 3}}, 0, true)},
+                                                             {"b.vtu", piece({{0, 2, 1, 4}}, 0, true)}}),
+                                              size))
+            EXPECT_EQ(e, "(no error)");
+    const std::string what = message([&] {
+        PvtuPartition p(pieces.source({{"a.vtu", piece({{0, 1, 2, 3}}, 0, true)}, {"b.vtu", piece({{0, 2, 1, 5}}, 0, true)}}));
+    });
+    EXPECT_EQ(what, pieces.scratch.at("b.vtu").string() + ": cell 0 lies on the same side of the face of node ids 0, 1, 2 as cell 0 of " +
+                        pieces.scratch.at("a.vtu").string() +
+                        ", its neighbour across it, so the two overlap: the mesh is tangled where it crosses from one piece into the other");
+}
+
 TEST(MeshOverlaps, PiecesThatShareNoNodeIdAreNoted) {
     const Pieces pieces;
     const auto low = [](int i, int, int) { return i == 0; };

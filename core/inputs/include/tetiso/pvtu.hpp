@@ -13,12 +13,13 @@
 // task then reads its piece again, alone. Ghost cells (vtkGhostType) are
 // skipped, so pieces do not overlap. The scan refuses a piece whose own
 // tetrahedra overlap (check_tetrahedra in mesh_file.hpp: one listed twice,
-// an inverted one), and pieces that overlap each other (one listed twice or
-// under two names, one inside another, each holding the whole mesh, cells
-// shared but not marked as ghosts) wherever a tetrahedron on the boundary of
-// one also lies on the other's boundary or reaches inside it
-// (pvtu_overlaps.hpp), naming it, its cell and both pieces; pieces that
-// overlap only where both are inside are not found. Pieces that share no
+// an inverted one), tetrahedra of two pieces that lie on one side of the
+// face they share (a tangle across pieces), and pieces that overlap each
+// other (one listed twice or under two names, one inside another, each
+// holding the whole mesh, cells shared but not marked as ghosts) wherever a
+// tetrahedron on the boundary of one also lies on the other's boundary or
+// reaches inside it (pvtu_overlaps.hpp), naming it, its cell and both
+// pieces; pieces that overlap only where both are inside are not found. Pieces that share no
 // node id with the rest are read, with a note (notes()).
 //
 // Solvers write a shared node from every rank that holds it, and its
