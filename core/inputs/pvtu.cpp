@@ -182,11 +182,12 @@ PieceScan scan_piece(const std::filesystem::path& path, const MeshSource& source
         const detail::TetNames names{&a.tet_numbers, a.number_word};
         const std::vector<std::uint8_t> listed_negative = detail::orient_each(
             a.tets,
-            [&a](std::int32_t p, std::int32_t q, std::int32_t r, std::int32_t s) {
-                return detail::volume6([&a](std::int32_t v, int axis) {
+            [&a](std::int32_t c0, std::int32_t c1, std::int32_t c2, std::int32_t c3) {
+                const auto position = [&a](std::int32_t v, int axis) {
                     const auto i = static_cast<std::size_t>(v);
                     return static_cast<double>(static_cast<float>(axis == 0 ? a.x[i] : axis == 1 ? a.y[i] : a.z[i]));
-                }, p, q, r, s);
+                };
+                return detail::volume6(position, c0, c1, c2, c3);
             },
             path.string(), names);
         std::vector<std::int32_t> on_boundary;
