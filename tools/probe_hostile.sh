@@ -36,7 +36,8 @@ row() {
         rows_passed=$((rows_passed + 1))
     else
         echo "FAILS ($((SECONDS - start)) s)"
-        sed 's/^/    | /' "$work/row.log" | tail -15
+        grep -E '^FAIL' "$work/row.log" | sed 's/^/    | /'
+        sed 's/^/    | /' "$work/row.log" | tail -8
         rows_failed+=("$name")
     fi
 }
