@@ -13,6 +13,7 @@
 
 #include "byte_buffer.hpp"
 #include "merge_tree.hpp"
+#include "tet_faces.hpp"
 #include "tetiso/error.hpp"
 
 namespace tetiso::detail {
@@ -49,60 +50,6 @@ bool BoundaryNode::operator<(const BoundaryNode& o) const { return std::tie(id, 
 
 namespace {
 
-// Calls found(u, v, w, t) for every face of `tets` that only one
-// tetrahedron, t, has. Faces are bucketed by their smallest corner (a counting sort) and
-// each bucket, a dozen faces or so, sorted on its own, which is faster than
-// sorting them all.
-template <class Found>
-void for_each_boundary_face(const std::int32_t* tets, std::size_t count, std::size_t nodes, Found found) {
-    std::vector<std::int64_t> first(nodes + 1, 0);
-    const auto face = [&](std::size_t t, int skip, std::int32_t (&f)[3]) {
-        int k = 0;
-        for (int c = 0; c < 4; ++c)
-            if (c != skip) f[k++] = tets[4 * t + static_cast<std::size_t>(c)];
-        if (f[0] > f[1]) std::swap(f[0], f[1]);
-        if (f[1] > f[2]) std::swap(f[1], f[2]);
-        if (f[0] > f[1]) std::swap(f[0], f[1]);
-    };
-    for (std::size_t t = 0; t < count; ++t)
-        for (int skip = 0; skip < 4; ++skip) {
-            std::int32_t f[3];
-            face(t, skip, f);
-            ++first[static_cast<std::size_t>(f[0]) + 1];
-        }
-    for (std::size_t v = 0; v < nodes; ++v) first[v + 1] += first[v];
-    struct Rest {
-        std::uint64_t corners; // (middle, largest) corner of the face
-        std::uint32_t tet;     // the tetrahedron it is a face of
-    };
-    std::vector<Rest> rest(4 * count);
-    {
-        std::vector<std::int64_t> fill(first.begin(), first.end() - 1);
-        for (std::size_t t = 0; t < count; ++t)
-            for (int skip = 0; skip < 4; ++skip) {
-                std::int32_t f[3];
-                face(t, skip, f);
-                rest[static_cast<std::size_t>(fill[static_cast<std::size_t>(f[0])]++)] = {
-                    static_cast<std::uint64_t>(f[1]) << 32 | static_cast<std::uint32_t>(f[2]), static_cast<std::uint32_t>(t)};
-            }
-    }
-    // Only the order of different faces matters: a face found twice is
-    // interior and skipped, whichever tetrahedron comes first.
-    const auto by_corners = [](const Rest& a, const Rest& b) { return a.corners < b.corners; };
-    for (std::size_t v = 0; v < nodes; ++v) {
-        const auto begin = rest.begin() + first[v], end = rest.begin() + first[v + 1];
-        std::sort(begin, end, by_corners);
-        for (auto i = begin; i != end;) {
-            auto j = i + 1;
-            while (j != end && j->corners == i->corners) ++j;
-            if (j - i == 1)
-                found(static_cast<std::int32_t>(v), static_cast<std::int32_t>(i->corners >> 32),
-                      static_cast<std::int32_t>(i->corners & 0xffffffffu), static_cast<std::size_t>(i->tet));
-            i = j;
-        }
-    }
-}
-
 // How far the copies of one shared node may lie apart, as a fraction of the
 // mesh's mean edge length; and how many units of float rounding (of the
 // larger magnitude) any two copies of a coordinate or a value may differ by.
@@ -132,43 +79,88 @@ std::string full_precision(double value) {
     return text;
 }
 
+// Pieces that share no node id with the rest are legal (a mesh of several
+// bodies) but more often pieces numbered apart by mistake, whose surfaces
+// would meet open where they touch: said in a note, not refused.
+template <class Root>
+std::string unjoined_pieces(const std::vector<std::string>& names, const std::string& whole, Root root) {
+    std::vector<std::vector<int>> groups(names.size());
+    for (int p = 0; p < static_cast<int>(names.size()); ++p) groups[static_cast<std::size_t>(root(p))].push_back(p);
+    groups.erase(std::remove_if(groups.begin(), groups.end(), [](const std::vector<int>& g) { return g.empty(); }), groups.end());
+    if (groups.size() < 2) return {};
+    std::string list;
+    for (std::size_t g = 0; g < groups.size() && g < 4; ++g) {
+        const std::vector<int>& members = groups[g];
+        list += g == 0 ? "" : "; ";
+        if (members.size() == 1) {
+            list += "piece " + std::to_string(members[0]) + " (" + names[static_cast<std::size_t>(members[0])] + ")";
+        } else {
+            list += "pieces " + std::to_string(members[0]);
+            for (std::size_t m = 1; m < members.size() && m < 4; ++m) list += ", " + std::to_string(members[m]);
+            list += members.size() > 4 ? " and " + std::to_string(members.size() - 4) + " more" : "";
+        }
+    }
+    if (groups.size() > 4) list += "; and " + std::to_string(groups.size() - 4) + " more groups";
+    return whole + ": the pieces fall into " + std::to_string(groups.size()) + " groups that share no node id (" + list +
+           "): their surfaces are not joined; if the groups touch, the node ids are not global";
+}
+
 ByteReader unpacker(std::string_view bytes) {
     return ByteReader(bytes, [](const char*) { throw Error("a piece scan's message from another rank is truncated"); });
 }
 
 } // namespace
 
-PieceScan scan_piece(const PieceMesh& piece, int p) {
+PieceScan scan_piece(const PieceMesh& piece, int p, const std::string& name, bool several) {
     PieceScan scan;
     const PieceNodes& a = piece.nodes;
-    const std::int32_t* tets = piece.tets;
     scan.tets = static_cast<std::int64_t>(piece.tet_count);
     scan.used = static_cast<std::int64_t>(piece.used.size());
     // The spacing as mean_edge_length computes it, over float positions.
     for (std::size_t t = 0; t < piece.tet_count; ++t)
         for (int i = 0; i < 4; ++i)
             for (int j = i + 1; j < 4; ++j) {
-                const auto u = static_cast<std::size_t>(tets[4 * t + static_cast<std::size_t>(i)]);
-                const auto v = static_cast<std::size_t>(tets[4 * t + static_cast<std::size_t>(j)]);
+                const auto u = static_cast<std::size_t>(piece.tets[4 * t + static_cast<std::size_t>(i)]);
+                const auto v = static_cast<std::size_t>(piece.tets[4 * t + static_cast<std::size_t>(j)]);
                 const double dx = a.x(u) - static_cast<double>(a.x(v));
                 const double dy = a.y(u) - static_cast<double>(a.y(v));
                 const double dz = a.z(u) - static_cast<double>(a.z(v));
                 scan.edge_sum += std::sqrt(dx * dx + dy * dy + dz * dz);
             }
+    // Oriented as a task orients them (over float positions), in a copy: the
+    // piece's arrays may be a solver's, which are only read.
+    std::vector<std::int32_t> tets(piece.tets, piece.tets + 4 * piece.tet_count);
+    const TetNames names{piece.numbers, piece.numbers ? piece.tet_count : 0, "cell"};
+    const std::vector<std::uint8_t> listed_negative = orient_each(
+        tets,
+        [&a](std::int32_t c0, std::int32_t c1, std::int32_t c2, std::int32_t c3) {
+            const auto position = [&a](std::int32_t v, int axis) {
+                return static_cast<double>(a.coordinate_at(axis, static_cast<std::size_t>(v)));
+            };
+            return volume6(position, c0, c1, c2, c3);
+        },
+        name, names);
+    std::vector<GlobalId> ids(a.count);
+    for (std::size_t i = 0; i < a.count; ++i) ids[i] = a.id(i);
     std::vector<std::int32_t> on_boundary;
-    for_each_boundary_face(tets, piece.tet_count, a.count, [&](std::int32_t u, std::int32_t v, std::int32_t w, std::size_t t) {
-        TetIds tet;
-        for (int k = 0; k < 4; ++k) tet[static_cast<std::size_t>(k)] = a.id(static_cast<std::size_t>(tets[4 * t + static_cast<std::size_t>(k)]));
-        std::sort(tet.begin(), tet.end());
+    std::vector<std::array<std::int32_t, 3>> boundary_faces;
+    const FaceClash clash = face_pass(tets, a.count, [&](std::int32_t u, std::int32_t v, std::int32_t w, std::size_t t) {
+        BoundaryTet tet{{}, piece.numbers ? piece.numbers[t] : t};
+        for (int k = 0; k < 4; ++k) tet.ids[static_cast<std::size_t>(k)] = ids[static_cast<std::size_t>(tets[4 * t + static_cast<std::size_t>(k)])];
+        std::sort(tet.ids.begin(), tet.ids.end());
         scan.boundary_tets.push_back(tet);
+        boundary_faces.push_back({u, v, w});
+        scan.faces.push_back(boundary_face(tets.data() + 4 * t, {u, v, w}, ids, tet.cell));
         const std::int32_t f[3] = {u, v, w};
         for (int e = 0; e < 3; ++e) {
-            const GlobalId g = a.id(static_cast<std::size_t>(f[e]));
-            const GlobalId h = a.id(static_cast<std::size_t>(f[(e + 1) % 3]));
+            const GlobalId g = ids[static_cast<std::size_t>(f[e])];
+            const GlobalId h = ids[static_cast<std::size_t>(f[(e + 1) % 3])];
             scan.edges.push_back({edge_key(g, h), p});
             on_boundary.push_back(f[e]);
         }
     });
+    refuse_clash(clash, listed_negative, name, names);
+    if (several) scan.inside = piece_inside(tets, ids, piece.used, boundary_faces);
     std::sort(scan.edges.begin(), scan.edges.end());
     scan.edges.erase(std::unique(scan.edges.begin(), scan.edges.end()), scan.edges.end());
     std::sort(scan.boundary_tets.begin(), scan.boundary_tets.end());
@@ -198,6 +190,7 @@ std::string pack_scans(const std::string& error, const std::vector<std::pair<int
         for (const auto& edge : scan.edges) keys.push_back(edge.first);
         out.put_array(keys);
         out.put_array(scan.boundary_tets);
+        out.put_array(scan.faces);
     }
     return std::move(out.bytes);
 }
@@ -221,7 +214,8 @@ void unpack_scans(const std::vector<std::string>& shares, std::vector<PieceScan>
             scan.error.assign(piece_error.begin(), piece_error.end());
             scan.nodes = in.get_array<BoundaryNode>();
             for (const EdgeKey key : in.get_array<EdgeKey>()) scan.edges.push_back({key, static_cast<int>(p)});
-            scan.boundary_tets = in.get_array<TetIds>();
+            scan.boundary_tets = in.get_array<BoundaryTet>();
+            scan.faces = in.get_array<BoundaryFace>();
         }
     }
     if (!first_error.empty()) throw Error(first_error);
@@ -230,27 +224,45 @@ void unpack_scans(const std::vector<std::string>& shares, std::vector<PieceScan>
         if (!scan.error.empty()) throw Error(scan.error);
 }
 
-PieceTables::PieceTables(std::vector<PieceScan>& scans, const std::vector<std::string>& names, const std::string& values) {
+PieceTables::PieceTables(std::vector<PieceScan>& scans, const std::vector<std::string>& names, const std::string& whole,
+                         const std::string& values, const std::vector<std::pair<int, PieceInside>>& inside,
+                         const Gather& gather) {
     const int parts = static_cast<int>(scans.size());
 
-    // Pieces that overlap (one listed twice, under two names, or holding the
-    // whole mesh each, as VTK writes an unstreamed grid in several pieces;
-    // cells shared but not marked as ghosts) hold a tetrahedron of the one's
-    // boundary in the other too; where that one is on both boundaries it is
-    // found here, before any task. Those on one boundary only are not.
+    // Pieces that overlap (one listed twice, under two names, inside another
+    // or holding the whole mesh each, as VTK writes an unstreamed grid in
+    // several pieces; cells shared but not marked as ghosts), before any
+    // task: a tetrahedron on the boundary of both, a fold across the face two
+    // pieces share, then one on the boundary of one that reaches inside the
+    // other, which each rank looks for in its own pieces; the first in the
+    // pieces' order is named, for any number of ranks.
     {
-        std::vector<std::pair<TetIds, int>> held;
-        for (int p = 0; p < parts; ++p)
-            for (const TetIds& tet : scans[static_cast<std::size_t>(p)].boundary_tets) held.push_back({tet, p});
-        std::sort(held.begin(), held.end());
-        for (std::size_t i = 1; i < held.size(); ++i)
-            if (held[i].first == held[i - 1].first) {
-                const TetIds& t = held[i].first;
-                throw Error(names[static_cast<std::size_t>(held[i].second)] + ": the tetrahedron of node ids " +
-                            std::to_string(t[0]) + ", " + std::to_string(t[1]) + ", " + std::to_string(t[2]) + ", " +
-                            std::to_string(t[3]) + " is also in " + names[static_cast<std::size_t>(held[i - 1].second)] +
-                            ": pieces overlap (a cell two pieces hold must be a ghost, vtkGhostType, in all but one)");
+        std::vector<std::vector<BoundaryTet>> boundary(scans.size());
+        for (std::size_t p = 0; p < scans.size(); ++p) boundary[p] = std::move(scans[p].boundary_tets);
+        refuse_shared_boundary_tets(boundary, names);
+        {
+            std::vector<std::vector<BoundaryFace>> faces(scans.size());
+            for (std::size_t p = 0; p < scans.size(); ++p) faces[p] = std::move(scans[p].faces);
+            refuse_folds_between(faces, names);
+        }
+        if (parts > 1) {
+            const InsideOverlap mine = find_inside_overlap(inside, boundary, names);
+            ByteWriter<std::string> out;
+            out.put(mine.piece), out.put(mine.tet), out.put(mine.other);
+            out.put_array(std::vector<char>(mine.message.begin(), mine.message.end()));
+            InsideOverlap first;
+            for (const std::string& share : gather(out.bytes)) {
+                ByteReader in = unpacker(share);
+                InsideOverlap found;
+                found.piece = in.get<std::int64_t>(), found.tet = in.get<std::uint64_t>(), found.other = in.get<std::int64_t>();
+                const auto message = in.get_array<char>();
+                found.message.assign(message.begin(), message.end());
+                if (!found.message.empty() &&
+                    (first.message.empty() || std::tie(found.piece, found.tet, found.other) < std::tie(first.piece, first.tet, first.other)))
+                    first = std::move(found);
             }
+            if (!first.message.empty()) throw Error(first.message);
+        }
     }
 
     std::vector<std::int64_t> part_tets(static_cast<std::size_t>(parts));
@@ -283,9 +295,20 @@ PieceTables::PieceTables(std::vector<PieceScan>& scans, const std::vector<std::s
     const auto describe = [&](const BoundaryNode& n) {
         return "(" + full_precision(n.x) + ", " + full_precision(n.y) + ", " + full_precision(n.z) + ")";
     };
+    std::vector<int> group_of(static_cast<std::size_t>(parts)); // pieces joined by shared nodes (union-find)
+    std::iota(group_of.begin(), group_of.end(), 0);
+    const auto root = [&group_of](int p) {
+        while (group_of[static_cast<std::size_t>(p)] != p)
+            p = group_of[static_cast<std::size_t>(p)] = group_of[static_cast<std::size_t>(group_of[static_cast<std::size_t>(p)])];
+        return p;
+    };
     for (std::size_t i = 0; i < boundary_nodes.size();) {
         std::size_t j = i + 1;
         while (j < boundary_nodes.size() && boundary_nodes[j].id == boundary_nodes[i].id) ++j;
+        for (std::size_t k = i + 1; k < j; ++k) {
+            const int a = root(boundary_nodes[i].piece), b = root(boundary_nodes[k].piece);
+            group_of[static_cast<std::size_t>(std::max(a, b))] = std::min(a, b);
+        }
         if (j - i > 1) {
             const auto smallest = [](const BoundaryNode& a, const BoundaryNode& b) {
                 return std::make_tuple(ordered(a.x), ordered(a.y), ordered(a.z), ordered(a.f)) <
@@ -317,6 +340,7 @@ PieceTables::PieceTables(std::vector<PieceScan>& scans, const std::vector<std::s
         i = j;
     }
     std::vector<BoundaryNode>().swap(boundary_nodes);
+    if (std::string note = unjoined_pieces(names, whole, root); !note.empty()) notes.push_back(std::move(note));
 
     // Shared edges, the pieces' adjacency and the tree.
     PairWeights weights;

@@ -6,7 +6,8 @@
 // two routes the same surface bytes:
 //
 //   piece_mesh      a piece's arrays as they lie, its used nodes by id
-//   scan_piece      what its boundary contributes to the tables
+//   scan_piece      its own tetrahedra checked for overlaps, and what its
+//                   boundary contributes to the tables
 //   pack / unpack   the scans as bytes for the ranks' all-gather
 //   PieceTables     the tables built from every piece's scan
 //   make_domain     a piece's domain, shared nodes as the tables say
@@ -15,10 +16,12 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "pvtu_overlaps.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/mesh.hpp"
 #include "tetiso/mesh_file.hpp"
@@ -67,14 +70,14 @@ struct PieceMesh {
     const std::int32_t* tets = nullptr; // 4 local node indices each, in [0, nodes.count)
     std::size_t tet_count = 0;
     std::vector<std::int32_t> used;
+    // Each tetrahedron's number where it differs from its position (a VTK
+    // cell index, an index among ghost cells), for messages; null where not.
+    const std::uint64_t* numbers = nullptr;
 };
 
 // Finds the used nodes; throws tetiso::Error naming `name` where the piece
 // has no tetrahedra or an id is given to two used nodes.
 PieceMesh piece_mesh(const PieceNodes& nodes, const std::int32_t* tets, std::size_t tet_count, const std::string& name);
-
-// A tetrahedron by its four global node ids, sorted.
-using TetIds = std::array<GlobalId, 4>;
 
 // A node on a piece's boundary, as the scan records it.
 struct BoundaryNode {
@@ -93,13 +96,23 @@ struct PieceScan {
     std::vector<BoundaryNode> nodes;
     std::vector<std::pair<EdgeKey, int>> edges;
     // The tetrahedra with a face on the boundary, each as its sorted node
-    // ids: two pieces that hold one tetrahedron overlap (see PieceTables).
-    std::vector<TetIds> boundary_tets;
+    // ids: two pieces that hold one tetrahedron overlap (pvtu_overlaps.hpp).
+    std::vector<BoundaryTet> boundary_tets;
+    // Its boundary faces by node ids, each with the side its tetrahedron
+    // lies on: two pieces on one side of a face fold over each other.
+    std::vector<BoundaryFace> faces;
+    // Kept by the rank that scanned it, not sent: what lies inside the piece.
+    PieceInside inside;
     std::string error;
 };
 
-// Piece p's scan.
-PieceScan scan_piece(const PieceMesh& piece, int p);
+// Piece p's scan. Throws tetiso::Error naming `name` where the piece's own
+// tetrahedra overlap (orient_each, face_pass and refuse_clash, the checks
+// check_tetrahedra makes of a whole mesh), oriented over float positions as
+// a task orients them, so that such a piece is refused before any task.
+// Where there are `several` pieces, keeps its inside for the check between
+// pieces.
+PieceScan scan_piece(const PieceMesh& piece, int p, const std::string& name, bool several);
 
 // A rank's scans (with the error that kept it from scanning, if any) as
 // bytes for RankGroup::all_gather.
@@ -117,11 +130,18 @@ void unpack_scans(const std::vector<std::string>& shares, std::vector<PieceScan>
 class PieceTables {
 public:
     PieceTables() = default;
-    // `names[p]` names piece p in messages. Where `values` names the field's
-    // values (a field given at the nodes, not evaluated at the positions),
-    // shared nodes' values must agree too. Throws tetiso::Error for pieces that overlap or
-    // disagree on a shared node. Empties `scans`.
-    PieceTables(std::vector<PieceScan>& scans, const std::vector<std::string>& names, const std::string& values);
+    // `names[p]` names piece p in messages, `whole` all of them (the
+    // .pvtu). Where `values` names the field's values (a field given at the
+    // nodes, not evaluated at the positions), shared nodes' values must
+    // agree too. `inside` holds this rank's pieces' insides (their scans'),
+    // `gather` is the ranks' all-gather (every rank calls it once where
+    // there are several pieces, to agree on the first piece that reaches
+    // inside another). Throws tetiso::Error, the same on every rank, for
+    // pieces that overlap (pvtu_overlaps.hpp) or disagree on a shared node.
+    // Empties `scans`.
+    using Gather = std::function<std::vector<std::string>(const std::string&)>;
+    PieceTables(std::vector<PieceScan>& scans, const std::vector<std::string>& names, const std::string& whole,
+                const std::string& values, const std::vector<std::pair<int, PieceInside>>& inside, const Gather& gather);
 
     int domain_count() const { return static_cast<int>(source_id.size()); }
     std::vector<int> domains_of_edge(GlobalId a, GlobalId b) const;
@@ -141,6 +161,9 @@ public:
     std::vector<float> shared_xyz;
     std::vector<float> shared_f;
     std::vector<std::uint64_t> digests; // each piece's scan's
+    // What was read but is likely not meant: pieces that fall into groups
+    // sharing no node id, whose surfaces are then not joined.
+    std::vector<std::string> notes;
     double spacing = 0;
     std::int64_t node_count = 0, tet_count = 0;
 };

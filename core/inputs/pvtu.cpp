@@ -4,6 +4,7 @@
 #include "tetiso/pvtu.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <limits>
 #include <numeric>
 
@@ -70,6 +71,7 @@ LoadedPiece load_piece(std::string_view bytes, const std::filesystem::path& path
         std::iota(a.ids.begin(), a.ids.end(), GlobalId{0});
     }
     piece.mesh = detail::piece_mesh(detail::nodes_of(a), a.tets.data(), a.tets.size() / 4, path.string());
+    piece.mesh.numbers = a.tet_numbers.empty() ? nullptr : a.tet_numbers.data();
     return piece;
 }
 
@@ -81,7 +83,7 @@ detail::PieceScan scan_piece(const std::filesystem::path& path, const MeshSource
         const std::string_view bytes = file.bytes();
         const std::uint64_t digest = split_digest(bytes.data(), bytes.size());
         const LoadedPiece piece = load_piece(bytes, path, source, ids_name, several);
-        scan = detail::scan_piece(piece.mesh, p);
+        scan = detail::scan_piece(piece.mesh, p, path.string(), several);
         scan.digest = digest;
     } catch (const Error& e) {
         scan.error = e.what();
@@ -114,14 +116,25 @@ PvtuPartition::PvtuPartition(const MeshSource& source, std::unique_ptr<Field> fi
         index_error = e.what();
     }
     std::vector<detail::PieceScan> scans(pieces_.size());
+    std::vector<std::pair<int, detail::PieceInside>> inside; // of this rank's pieces
+    for (auto& [p, scan] : mine) inside.emplace_back(p, std::move(scan.inside));
+    const detail::PieceTables::Gather gather = [&group](const std::string& share) {
+        return group.all_gather ? group.all_gather(share) : std::vector<std::string>{share};
+    };
     {
         const std::string share = detail::pack_scans(index_error, mine);
         std::vector<std::pair<int, detail::PieceScan>>().swap(mine);
-        detail::unpack_scans(group.all_gather ? group.all_gather(share) : std::vector<std::string>{share}, scans);
+        detail::unpack_scans(gather(share), scans);
     }
     std::vector<std::string> names;
     for (const std::filesystem::path& piece : pieces_) names.push_back(piece.string());
-    tables_ = std::make_unique<detail::PieceTables>(scans, names, source.array.empty() ? "" : "'" + source.array + "'");
+    tables_ = std::make_unique<detail::PieceTables>(scans, names, source.path.string(),
+                                                    source.array.empty() ? "" : "'" + source.array + "'", inside, gather);
+    std::vector<std::pair<int, detail::PieceInside>>().swap(inside);
+    for (std::string& note : tables_->notes) {
+        note += " (name the right array with --node-ids)";
+        if (group.rank == 0) std::fprintf(stderr, "tetiso: note: %s\n", note.c_str());
+    }
     const detail::PieceTables& t = *tables_;
     fingerprint_ = Digest()
                        .add(t.node_count)
@@ -143,6 +156,7 @@ const std::vector<DomainTreeNode>& PvtuPartition::tree() const { return tables_-
 double PvtuPartition::spacing() const { return tables_->spacing; }
 std::int64_t PvtuPartition::node_count() const { return tables_->node_count; }
 std::int64_t PvtuPartition::tet_count() const { return tables_->tet_count; }
+const std::vector<std::string>& PvtuPartition::notes() const { return tables_->notes; }
 int PvtuPartition::source_id(int domain) const { return tables_->source_id.at(static_cast<std::size_t>(domain)); }
 
 const std::filesystem::path& PvtuPartition::piece_path(int domain) const {

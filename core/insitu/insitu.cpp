@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <new>
@@ -184,8 +185,13 @@ InSituResult InSituSession::isosurface(const InSituPiece& piece, const InSituOpt
     // in its share, so that every rank throws it.
     std::vector<std::pair<int, detail::PieceScan>> mine;
     std::string scan_problem;
+    std::vector<std::pair<int, detail::PieceInside>> inside;
     try {
-        mine.emplace_back(s.rank, detail::scan_piece(checked.mesh, s.rank));
+        mine.emplace_back(s.rank, detail::scan_piece(checked.mesh, s.rank, piece_name(s.rank), s.size > 1));
+        inside.emplace_back(s.rank, std::move(mine.back().second.inside));
+    } catch (const Error& e) { // its tetrahedra overlap, as the .pvtu route's scan refuses them
+        mine.clear();
+        scan_problem = e.what();
     } catch (const std::bad_alloc&) {
         mine.clear();
         scan_problem = "rank " + std::to_string(s.rank) + ": out of memory while scanning " + piece_name(s.rank);
@@ -195,11 +201,15 @@ InSituResult InSituSession::isosurface(const InSituPiece& piece, const InSituOpt
     cost.seconds.scan = seconds_since(stage);
     stage = Clock::now();
     std::vector<detail::PieceScan> scans(static_cast<std::size_t>(s.size));
-    detail::unpack_scans(insitu::all_gather(s.comm, share), scans);
+    const detail::PieceTables::Gather gather = [&s](const std::string& bytes) { return insitu::all_gather(s.comm, bytes); };
+    detail::unpack_scans(gather(share), scans);
     std::vector<std::string> names;
     for (int r = 0; r < s.size; ++r) names.push_back(piece_name(r));
     // The same on every rank, errors too: no rank goes on alone.
-    const detail::PieceTables tables(scans, names, "the field");
+    const detail::PieceTables tables(scans, names, "the pieces", "the field", inside, gather);
+    std::vector<std::pair<int, detail::PieceInside>>().swap(inside);
+    for (const std::string& note : tables.notes)
+        if (s.rank == s.options.root) std::fprintf(stderr, "tetiso: note: %s\n", note.c_str());
     const InSituPartition partition(tables, checked.mesh, s.rank);
     std::vector<int> domain_of_rank(static_cast<std::size_t>(s.size));
     for (int d = 0; d < tables.domain_count(); ++d) domain_of_rank[static_cast<std::size_t>(tables.source_id[static_cast<std::size_t>(d)])] = d;

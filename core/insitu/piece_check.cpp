@@ -111,11 +111,17 @@ CheckedPiece check_piece(const InSituPiece& piece) {
             for (int j = 0; j < k; ++j)
                 if (v[j] == v[k]) throw Error("tetrahedron " + std::to_string(t) + " repeats node " + std::to_string(v[k]));
         }
-        if (ghost) checked.kept.insert(checked.kept.end(), v, v + 4);
+        if (ghost) {
+            checked.kept.insert(checked.kept.end(), v, v + 4);
+            checked.numbers.push_back(t);
+        }
     }
     const std::int32_t* kept = ghost ? checked.kept.data() : corners;
     const std::size_t kept_count = ghost ? checked.kept.size() / 4 : tets;
     checked.mesh = detail::piece_mesh(view, kept, kept_count, "the piece");
+    // Messages name a tetrahedron by its place in the solver's array, ghosts
+    // counted, as the .vtu reader names it by its cell index.
+    checked.mesh.numbers = ghost ? checked.numbers.data() : nullptr;
     return checked;
 }
 

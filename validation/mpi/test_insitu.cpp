@@ -10,9 +10,16 @@
 //            DIR/insitu2.ply), the root being the last rank; DIR/level.txt
 //   bad      the last rank's piece has a corner out of range
 //   overlap  the ghost cells are not marked (two ranks hold them)
+//   twice    the last rank's piece lists its tetrahedron 0 again, at its
+//            end; the pieces and the .pvtu are written as in `same`, so
+//            that the script can hold the message to the file route's
 //   options  the last rank asks for another level
-//   flat     the last rank's tetrahedron 0 has zero volume, found in its
-//            domain task, after the collectives of the call's start
+//   flat     the last rank's tetrahedron 0 has zero volume in its domain
+//            task, after the collectives of the call's start, not in the
+//            scan (which refuses a flat tetrahedron): one of its corners is
+//            a node other pieces hold, given by this piece a hair off the
+//            plane, which its domain takes from them, in it. With one rank
+//            no node is shared, and the scan refuses it.
 // In the error modes every rank writes the message it caught to
 // DIR/error-R.txt; the exit status is 0 when the call threw on this rank.
 #include <mpi.h>
@@ -24,6 +31,7 @@
 #include <map>
 #include <numeric>
 #include <random>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -175,13 +183,49 @@ int main(int argc, char** argv) {
         } else {
             if (mode == "bad" && rank == size - 1) piece.tets[5] = static_cast<std::int32_t>(piece.nodes());
             if (mode == "options" && rank == size - 1) options.level = level + 0.25;
+            if (mode == "twice") {
+                if (rank == size - 1) {
+                    piece.tets.insert(piece.tets.end(), piece.tets.begin(), piece.tets.begin() + 4);
+                    piece.ghost.push_back(0);
+                }
+                write_vtu(piece, dir + "/piece_" + std::to_string(rank) + ".vtu");
+                if (rank == 0) write_pvtu(size, dir + "/pieces.pvtu");
+            }
             if (mode == "flat" && rank == size - 1) {
-                // Tetrahedron 0 over four nodes of one plane: the piece passes
-                // the checks and the scan, and its domain task fails.
-                std::vector<std::int32_t> plane;
-                for (std::size_t i = 0; i < piece.nodes() && plane.size() < 4; ++i)
-                    if (piece.x(i, 2) == piece.x(0, 2)) plane.push_back(static_cast<std::int32_t>(i));
-                std::copy(plane.begin(), plane.end(), piece.tets.begin());
+                std::set<std::int64_t> own, elsewhere;
+                for (int d = 0; d < size; ++d)
+                    for (const std::int64_t id : lattice.make_domain(d).gid) (d == rank ? own : elsewhere).insert(id);
+                std::size_t shared = 0;
+                if (size > 1)
+                    while (!(own.count(piece.id(shared)) && elsewhere.count(piece.id(shared)))) ++shared;
+                // Three nodes of this piece alone in the shared node's plane,
+                // far apart, so that no face of the new tetrahedron is a face of
+                // the mesh (which would be three tetrahedra on one face).
+                const auto distance2 = [&](std::size_t i, std::size_t j) {
+                    double sum = 0;
+                    for (int axis = 0; axis < 2; ++axis) sum += (piece.x(i, axis) - piece.x(j, axis)) * (piece.x(i, axis) - piece.x(j, axis));
+                    return sum;
+                };
+                const auto area2 = [&](std::size_t i, std::size_t j, std::size_t k) {
+                    const double cross = (piece.x(j, 0) - piece.x(i, 0)) * (piece.x(k, 1) - piece.x(i, 1)) -
+                                         (piece.x(j, 1) - piece.x(i, 1)) * (piece.x(k, 0) - piece.x(i, 0));
+                    return cross * cross;
+                };
+                std::vector<std::size_t> plane;
+                for (std::size_t i = 0; i < piece.nodes(); ++i)
+                    if (i != shared && piece.x(i, 2) == piece.x(shared, 2) && own.count(piece.id(i)) && !elsewhere.count(piece.id(i)))
+                        plane.push_back(i);
+                const auto best = [&](auto score) { return *std::max_element(plane.begin(), plane.end(), [&](std::size_t i, std::size_t j) { return score(i) < score(j); }); };
+                const std::size_t a = best([&](std::size_t i) { return distance2(i, shared); });
+                const std::size_t b = best([&](std::size_t i) { return distance2(i, a); });
+                const std::size_t c = best([&](std::size_t i) { return area2(a, b, i); });
+                const std::int32_t corners[4] = {static_cast<std::int32_t>(shared), static_cast<std::int32_t>(a),
+                                                 static_cast<std::int32_t>(b), static_cast<std::int32_t>(c)};
+                std::copy(corners, corners + 4, piece.tets.begin());
+                if (size > 1) { // above the other pieces' copy, so theirs is taken
+                    if (piece.wide) piece.xyz64[3 * shared + 2] += 1e-6;
+                    else piece.xyz32[3 * shared + 2] += 1e-6f;
+                }
             }
             try {
                 session.isosurface(piece.view(mode != "overlap"), options);

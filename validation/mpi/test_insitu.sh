@@ -3,9 +3,11 @@
 # 1, 2 and 3 ranks the surface a solver's ranks get in memory is the bytes
 # `tetiso run --mesh` writes for the same pieces as a .pvtu, ghost cells
 # skipped; a second call of the session gives the same bytes; bad input on
-# one rank, a domain task failing on one rank, overlapping pieces and
-# options that differ between ranks end the call on every rank with one
-# message naming the rank, nothing written.
+# one rank, a domain task failing on one rank, overlapping pieces, a
+# tetrahedron listed twice in one rank's piece and options that differ
+# between ranks end the call on every rank with one message naming the
+# rank, nothing written; the tetrahedron listed twice is refused in the
+# words `tetiso run --mesh` uses for the same pieces as a .pvtu.
 # Usage: test_insitu.sh tetiso mpiexec test_insitu
 set -u
 tetiso=$1
@@ -53,7 +55,27 @@ for k in 1 2 3; do
     dir="$work/flat-$k"
     mkdir -p "$dir"
     mpi "$k" "$program" flat "$dir" && ok || fail "$k ranks: a failing domain task did not throw on every rank"
-    same_error "$dir" "$k" "rank $((k - 1)): domain [0-9]* (rank $((k - 1))'s piece): rank $((k - 1))'s piece: tetrahedron 0 has zero volume" "$k ranks, failing task"
+    if [ "$k" -gt 1 ]; then
+        same_error "$dir" "$k" "rank $((k - 1)): domain [0-9]* (rank $((k - 1))'s piece): rank $((k - 1))'s piece: tetrahedron 0 has zero volume" "$k ranks, failing task"
+    else # no shared node to move: the scan refuses the flat tetrahedron, as the .pvtu route's does
+        same_error "$dir" "$k" "^rank 0's piece: tetrahedron 0 (cell 0) has zero volume" "$k ranks, flat tetrahedron"
+    fi
+
+    # One message on every rank, and the file route's for the same pieces
+    # but for the piece's name (a rank's piece, not a file).
+    dir="$work/twice-$k"
+    mkdir -p "$dir"
+    mpi "$k" "$program" twice "$dir" && ok || fail "$k ranks: a tetrahedron listed twice did not throw on every rank"
+    same_error "$dir" "$k" "rank $((k - 1))'s piece: tetrahedron [0-9]* (cell [0-9]*) repeats tetrahedron 0 (cell 0): the same four corners" "$k ranks, tetrahedron twice"
+    if "$tetiso" run --quiet --mesh "$dir/pieces.pvtu" --array f --level 0 -o "$dir/file.ply" 2>"$dir/file-error.txt"; then
+        fail "$k ranks: tetiso run took a piece with a tetrahedron listed twice"
+    else
+        file_words=$(sed -n "s|.*/piece_$((k - 1)).vtu: ||p" "$dir/file-error.txt")
+        insitu_words=$(sed -n "s|.*rank $((k - 1))'s piece: ||p" "$dir/error-0.txt")
+        [ -n "$file_words" ] && [ "$file_words" = "$insitu_words" ] && ok ||
+            fail "$k ranks: tetrahedron twice: in situ '$insitu_words', file route '$file_words'"
+        [ -e "$dir/file.ply" ] && fail "$k ranks: tetiso run left $dir/file.ply"
+    fi
 
     dir="$work/options-$k"
     mkdir -p "$dir"

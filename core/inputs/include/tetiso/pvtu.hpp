@@ -11,10 +11,18 @@
 // the merge tree (heavy-edge matching, as MeshPartition builds it) and the
 // checks between pieces, in memory of the order of the pieces' surfaces. A
 // task then reads its piece again, alone. Ghost cells (vtkGhostType) are
-// skipped, so pieces do not overlap; pieces that still do (one listed twice
-// or under two names, each holding the whole mesh, cells shared but not
-// marked as ghosts) are refused by the scan where a tetrahedron lies on the
-// boundary of both, naming it and the two pieces.
+// skipped, so pieces do not overlap. The scan refuses a piece whose own
+// tetrahedra overlap (check_tetrahedra in mesh_file.hpp: one listed twice,
+// an inverted one), tetrahedra of two pieces that lie on one side of the
+// face they share (a tangle across pieces), and pieces that overlap each
+// other (one listed twice or under two names, one inside another, each
+// holding the whole mesh, cells shared but not marked as ghosts) wherever a
+// tetrahedron on the boundary of one also lies on the other's boundary or
+// reaches inside it (pvtu_overlaps.hpp), naming it, its cell and both
+// pieces; pieces that overlap only where both are inside are not found.
+// Pieces that share no node id with the rest are read, with a note
+// (notes()). The in-situ call (tetiso/insitu.hpp) goes through the same
+// scan and checks (core/inputs/piece_tables.hpp), so it refuses the same pieces.
 //
 // Solvers write a shared node from every rank that holds it, and its
 // coordinates and values need not carry the same bits in each: a shared node
@@ -85,6 +93,12 @@ public:
     std::int64_t node_count() const override;
     std::int64_t tet_count() const override;
     std::uint64_t fingerprint() const override { return fingerprint_; }
+
+    // What was read but is likely not meant, each also printed on stderr as
+    // "tetiso: note: TEXT" by rank 0 of the group: pieces that fall into
+    // groups sharing no node id (a mesh of several bodies, or ids that are
+    // not global), whose surfaces are then not joined.
+    const std::vector<std::string>& notes() const;
 
     // The .pvtu's own index of `domain`'s piece.
     int source_id(int domain) const;

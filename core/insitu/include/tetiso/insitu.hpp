@@ -175,8 +175,10 @@ public:
     // (an array of the wrong type or size, an index out of range, a
     // coordinate or value that is not finite in float range, a node id
     // outside [0, 2^32) or twice in one piece, a tetrahedron of zero volume,
-    // a piece with no tetrahedra besides ghosts, pieces that overlap or
-    // disagree on a shared node), where the options differ between ranks,
+    // a piece with no tetrahedra besides ghosts, tetrahedra that overlap in
+    // one piece (one listed twice, one inverted) or across pieces, pieces
+    // that overlap or disagree on a shared node: the .pvtu reader's checks,
+    // in its words), where the options differ between ranks,
     // or where a task fails on any rank; then nothing is written.
     InSituResult isosurface(const InSituPiece& piece, const InSituOptions& options);
 
