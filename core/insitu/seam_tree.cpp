@@ -11,6 +11,7 @@
 #include <new>
 
 #include "byte_buffer.hpp"
+#include "piece_bytes.hpp"
 #include "tetiso/domain_task.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/schedule.hpp"
@@ -28,38 +29,14 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 std::string encode(const Piece* piece) {
     detail::ByteWriter<std::string> out;
     out.put(static_cast<std::uint8_t>(piece ? 1 : 0));
-    if (piece) {
-        out.put_array(piece->x);
-        out.put_array(piece->y);
-        out.put_array(piece->z);
-        out.put_array(piece->key);
-        out.put_array(piece->flags);
-        out.put_array(piece->triangles);
-        out.put_array(piece->domains);
-        out.put_array(piece->error);
-        out.put_array(piece->sample_xyz);
-        out.put_array(piece->sample_triangle);
-        out.put_array(piece->sampled);
-    }
+    if (piece) detail::put_piece(out, *piece);
     return std::move(out.bytes);
 }
 
 std::optional<Piece> decode(const std::string& bytes) {
     detail::ByteReader in(bytes, [](const char*) { throw Error("a piece from another rank is truncated"); });
     if (in.get<std::uint8_t>() == 0) return std::nullopt;
-    Piece piece;
-    piece.x = in.get_array<float>();
-    piece.y = in.get_array<float>();
-    piece.z = in.get_array<float>();
-    piece.key = in.get_array<EdgeKey>();
-    piece.flags = in.get_array<std::uint8_t>();
-    piece.triangles = in.get_array<std::int32_t>();
-    piece.domains = in.get_array<int>();
-    piece.error = in.get_array<float>();
-    piece.sample_xyz = in.get_array<float>();
-    piece.sample_triangle = in.get_array<std::int32_t>();
-    piece.sampled = in.get_array<std::uint8_t>();
-    return piece;
+    return detail::get_piece(in);
 }
 
 } // namespace

@@ -16,6 +16,7 @@
 #include "module.hpp"
 #include "options.hpp"
 #include "tetiso/domain_task.hpp"
+#include "tetiso/error_unit.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/lattice.hpp"
@@ -25,23 +26,6 @@
 
 namespace tetiso::python {
 namespace {
-
-// `tetiso reduce`'s default bound is this fraction of the input's mean edge
-// length (core/cli/commands.hpp, kAutoErrorPerEdgeLength), measured the way
-// the CLI measures it (core/cli/reduce_command.cpp), so that the default gives
-// its bytes.
-constexpr double kAutoErrorPerEdgeLength = 0.4;
-
-double mean_edge_length(const Piece& piece) {
-    double sum = 0;
-    for (std::size_t t = 0; t < piece.triangle_count(); ++t)
-        for (int k = 0; k < 3; ++k) {
-            const auto a = static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>(k)]);
-            const auto b = static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>((k + 1) % 3)]);
-            sum += std::hypot(piece.x[a] - piece.x[b], piece.y[a] - piece.y[b], piece.z[a] - piece.z[b]);
-        }
-    return piece.triangle_count() ? sum / static_cast<double>(3 * piece.triangle_count()) : 0.0;
-}
 
 // The part of a call's options that every reduction shares.
 struct Reduction {
