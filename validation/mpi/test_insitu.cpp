@@ -26,6 +26,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -159,6 +160,11 @@ int main(int argc, char** argv) {
         SolverPiece piece = make_piece(lattice, rank, (rank + 1) % size, rank % 2 == 1, 7u + static_cast<unsigned>(rank));
         tetiso::InSituSessionOptions session_options;
         session_options.root = size - 1;
+        // The same checks with each rank's task on a GPU (run where one is).
+        if (const char* device = std::getenv("TETISO_TEST_INSITU_DEVICE"))
+            session_options.device = std::string(device) == "gpu"    ? tetiso::InSituDevice::gpu
+                                     : std::string(device) == "auto" ? tetiso::InSituDevice::automatic
+                                                                     : tetiso::InSituDevice::cpu;
         tetiso::InSituSession session(MPI_COMM_WORLD, session_options);
         tetiso::InSituOptions options;
         options.level = level;

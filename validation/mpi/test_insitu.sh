@@ -9,6 +9,8 @@
 # rank, nothing written; the tetrahedron listed twice is refused in the
 # words `tetiso run --mesh` uses for the same pieces as a .pvtu.
 # Usage: test_insitu.sh tetiso mpiexec test_insitu
+# TETISO_TEST_INSITU_DEVICE=gpu (or auto) runs the in-situ tasks on the
+# ranks' GPUs, against the CPU's file route.
 set -u
 tetiso=$1
 mpiexec=${2:-mpirun}
