@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include <array>
-#include <barrier>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -16,6 +15,7 @@
 #include <vector>
 
 #include "test_support.hpp"
+#include "thread_ranks.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/mesh_file.hpp"
 #include "tetiso/pvtu.hpp"
@@ -120,28 +120,6 @@ TEST(MeshOverlaps, AnInvertedTetrahedronIsNamedAgainstTheMeshsOrientation) {
     EXPECT_NE(std::find(inverted.begin(), inverted.end(), named), inverted.end()) << what;
 }
 
-// Ranks simulated by threads, as in test_solver_meshes.cpp.
-class ThreadRanks {
-public:
-    explicit ThreadRanks(int size) : shares_(static_cast<std::size_t>(size)), barrier_(size) {}
-    RankGroup group(int rank) {
-        RankGroup group;
-        group.rank = rank;
-        group.size = static_cast<int>(shares_.size());
-        group.all_gather = [this, rank](const std::string& mine) {
-            shares_[static_cast<std::size_t>(rank)] = mine;
-            barrier_.arrive_and_wait();
-            std::vector<std::string> all = shares_;
-            barrier_.arrive_and_wait();
-            return all;
-        };
-        return group;
-    }
-
-private:
-    std::vector<std::string> shares_;
-    std::barrier<> barrier_;
-};
 
 // An ascii piece of tetrahedra over the points of a 4 x 4 x 4 lattice, or
 // the six of points() where `small`, node ids their indices (+ id_offset).

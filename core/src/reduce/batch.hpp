@@ -109,12 +109,7 @@ void load_pieces(Exec& exec, const std::vector<Piece>& pieces, bool bounded, Red
         build_raw_samples(exec, s.view(), st.samples, st.scratch, st.rank);
         return;
     }
-    exec.upload(samples.point, st.samples.point);
-    exec.upload(samples.owner, st.samples.owner);
-    exec.upload(samples.far, st.samples.far);
-    exec.upload(samples.far_point, st.samples.far_point);
-    st.samples.count = static_cast<i32>(samples.point.size());
-    st.samples.on = true;
+    upload_samples(exec, samples, st);
 }
 
 // Entries [stride * begin, stride * end) of a piece's array.

@@ -106,6 +106,17 @@ inline Params make_params(const ReduceOptions& o) {
 // surface at N = 100.
 constexpr int kMaxRoundThreads = 16;
 
+// Samples made on the host (those a reduced piece carries) into the state.
+template <class Exec>
+void upload_samples(Exec& exec, const HostSamples& h, ReductionState<Exec>& st) {
+    exec.upload(h.point, st.samples.point);
+    exec.upload(h.owner, st.samples.owner);
+    exec.upload(h.far, st.samples.far);
+    exec.upload(h.far_point, st.samples.far_point);
+    st.samples.count = static_cast<i32>(h.point.size());
+    st.samples.on = true;
+}
+
 // Loads a piece (checked by the caller) into the state: its surface and,
 // with an error bound, its samples.
 template <class Exec>
@@ -134,13 +145,7 @@ void load_piece(Exec& exec, const Piece& in, bool bounded, ReductionState<Exec>&
         build_raw_samples(exec, s.view(), st.samples, st.scratch, st.rank);
         return;
     }
-    const HostSamples h = samples_of_reduced_input(in);
-    exec.upload(h.point, st.samples.point);
-    exec.upload(h.owner, st.samples.owner);
-    exec.upload(h.far, st.samples.far);
-    exec.upload(h.far_point, st.samples.far_point);
-    st.samples.count = static_cast<i32>(h.point.size());
-    st.samples.on = true;
+    upload_samples(exec, samples_of_reduced_input(in), st);
 }
 
 // The rounds. threads: what the host may use to begin with (options.
