@@ -17,12 +17,7 @@ mpiexec=${2:-mpirun}
 program=$3
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
-passed=0
-failures=0
-ok() { passed=$((passed + 1)); }
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-mpi() { local k=$1; shift; timeout 300 "$mpiexec" --oversubscribe -np "$k" "$@"; }
+source "$(dirname "$0")/mpi_support.sh"
 
 # Every rank caught one message, the same on all, and it says what.
 same_error() {
