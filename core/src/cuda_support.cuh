@@ -116,12 +116,12 @@ __global__ void for_each_kernel(std::int64_t n, Function function) {
 
 // The same for loops of heavy elements (Grain::kTests: a legality test each,
 // some 200 registers' worth of state uncapped): the compiler is held to the
-// registers that let MinBlocks blocks share a multiprocessor (80 for three,
-// 128 for two), trading more warps to hide the latency of each test's long
-// chains of loads against spills to local memory. CudaExec picks the bound
-// (TETISO_GPU_TEST_BLOCKS_PER_SM chooses, for measuring).
-template <int MinBlocks, class Function>
-__global__ void __launch_bounds__(kBlock, MinBlocks) for_each_heavy_kernel(std::int64_t n, Function function) {
+// registers that let three blocks share a multiprocessor (80), so that more
+// warps hide the latency of each test's long chains of loads: faster than
+// two blocks (128 registers) or uncapped, and four blocks (64) gain nothing
+// more (TETISO_GPU_TEST_BLOCKS_PER_SM overrides it, for measuring).
+template <class Function>
+__global__ void __launch_bounds__(kBlock, 3) for_each_heavy_kernel(std::int64_t n, Function function) {
     for (std::int64_t i = blockIdx.x * static_cast<std::int64_t>(blockDim.x) + threadIdx.x; i < n;
          i += static_cast<std::int64_t>(gridDim.x) * blockDim.x)
         function(i);

@@ -57,22 +57,11 @@ struct IndexCount {
 
 // for_each_of_kernel for the legality tests: the registers of
 // for_each_heavy_kernel.
-template <int MinBlocks, class Function>
-__global__ void __launch_bounds__(cuda::kBlock, MinBlocks)
+template <class Function>
+__global__ void __launch_bounds__(cuda::kBlock, 3)
     for_each_of_heavy_kernel(const std::int64_t* n, std::int64_t min_n, Function function) {
     const std::int64_t count = *n > min_n ? *n : min_n;
     for (std::int64_t i = blockIdx.x * static_cast<std::int64_t>(blockDim.x) + threadIdx.x; i < count;
-         i += static_cast<std::int64_t>(gridDim.x) * blockDim.x)
-        function(i);
-}
-
-// for_each_kernel for the samples' placements (Grain::kSamples): a sample's
-// distances to a fan's faces need more registers than the tests' cap
-// leaves, and spilled, each thread's loop over the faces read and wrote its
-// spills in local memory; two blocks a multiprocessor hold it in registers.
-template <class Function>
-__global__ void __launch_bounds__(cuda::kBlock, 2) for_each_samples_kernel(std::int64_t n, Function function) {
-    for (std::int64_t i = blockIdx.x * static_cast<std::int64_t>(blockDim.x) + threadIdx.x; i < n;
          i += static_cast<std::int64_t>(gridDim.x) * blockDim.x)
         function(i);
 }
@@ -140,7 +129,6 @@ public:
         // 2048 threads a multiprocessor: 8 blocks of kBlock.
         resident_blocks_ = static_cast<unsigned>(std::max(1, processors)) * (2048 / cuda::kBlock);
         test_blocks_ = static_cast<unsigned>(std::max(1, processors)) * tests_blocks_per_processor();
-        tests_bound_ = static_cast<int>(std::min(3u, tests_blocks_per_processor()));
         cuda::check(cudaMallocHost(reinterpret_cast<void**>(&pinned_), sizeof(i64) * (kScalars + kTallySlots)),
                     "cudaMallocHost");
         scalars_.resize(kScalars);
@@ -182,21 +170,11 @@ public:
     void for_each(i64 n, const Function& function, Grain grain = Grain::kCheap, const char* file = __builtin_FILE(),
                   int line = __builtin_LINE()) const {
         const Timed timed(*this, "for_each", file, line);
-        if (grain == Grain::kSamples && n > 0) {
-            cuda_exec::for_each_samples_kernel<<<cuda::blocks_for(n), cuda::kBlock, 0, stream_>>>(n, function);
-            cuda::check_launch("for_each (samples)");
-            return;
-        }
         if (grain != Grain::kTests || n <= 0) return cuda::for_each(stream_, n, function);
         // One wave of blocks, each thread striding: how many stay resident
         // on a multiprocessor decides how much of the tests' per-thread
         // scratch (local memory) the caches hold.
-        const unsigned blocks = std::min(cuda::blocks_for(n), test_blocks_);
-        switch (tests_bound_) {
-        case 1: cuda::for_each_heavy_kernel<1><<<blocks, cuda::kBlock, 0, stream_>>>(n, function); break;
-        case 2: cuda::for_each_heavy_kernel<2><<<blocks, cuda::kBlock, 0, stream_>>>(n, function); break;
-        default: cuda::for_each_heavy_kernel<3><<<blocks, cuda::kBlock, 0, stream_>>>(n, function);
-        }
+        cuda::for_each_heavy_kernel<<<std::min(cuda::blocks_for(n), test_blocks_), cuda::kBlock, 0, stream_>>>(n, function);
         cuda::check_launch("for_each (tests)");
     }
 
@@ -213,11 +191,7 @@ public:
         if (most <= 0) return;
         if (grain == Grain::kTests) {
             const unsigned blocks = std::min<unsigned>(cuda::blocks_for(most), test_blocks_);
-            switch (tests_bound_) {
-            case 1: cuda_exec::for_each_of_heavy_kernel<1><<<blocks, cuda::kBlock, 0, stream_>>>(n, min_n, function); break;
-            case 2: cuda_exec::for_each_of_heavy_kernel<2><<<blocks, cuda::kBlock, 0, stream_>>>(n, min_n, function); break;
-            default: cuda_exec::for_each_of_heavy_kernel<3><<<blocks, cuda::kBlock, 0, stream_>>>(n, min_n, function);
-            }
+            cuda_exec::for_each_of_heavy_kernel<<<blocks, cuda::kBlock, 0, stream_>>>(n, min_n, function);
         } else {
             const unsigned blocks = std::min<unsigned>(cuda::blocks_for(most), resident_blocks_);
             cuda::for_each_of_kernel<<<blocks, cuda::kBlock, 0, stream_>>>(n, min_n, function);
@@ -600,7 +574,6 @@ private:
 
     cudaStream_t stream_;
     unsigned resident_blocks_ = 1, test_blocks_ = 1;
-    int tests_bound_ = 3; // the blocks a multiprocessor holds that the tests' kernels' registers are bounded for
     std::vector<cudaEvent_t> marks_;
     std::size_t next_mark_ = 0;
     mutable cuda_exec::Profile profile_;

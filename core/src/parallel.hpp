@@ -49,15 +49,11 @@ constexpr i64 kMinParallelTests = 64;
 constexpr i64 kMinParallelWindow = 2048;
 
 // How a loop's elements cost: the same (static blocks), or unevenly
-// (legality tests, or the samples' placements of the tests: dynamic chunks),
-// and from what size it forks. On the host samples are tests; a device gives
-// them kernels of their own (exec_cuda.cuh).
-enum class Grain { kCheap, kTests, kSamples, kWindow };
-
-constexpr bool uneven(Grain grain) { return grain == Grain::kTests || grain == Grain::kSamples; }
+// (legality tests: dynamic chunks), and from what size it forks.
+enum class Grain { kCheap, kTests, kWindow };
 
 constexpr i64 min_parallel(Grain grain) {
-    return uneven(grain) ? kMinParallelTests : (grain == Grain::kWindow ? kMinParallelWindow : kMinParallel);
+    return grain == Grain::kTests ? kMinParallelTests : (grain == Grain::kWindow ? kMinParallelWindow : kMinParallel);
 }
 
 // function(i) for i in [0, n); min_parallel: the size below which the loop
@@ -92,7 +88,7 @@ void for_each_test(int threads, i64 n, const Function& function) {
 
 template <class Function>
 void for_each(int threads, i64 n, Grain grain, const Function& function) {
-    if (uneven(grain)) for_each_test(threads, n, function);
+    if (grain == Grain::kTests) for_each_test(threads, n, function);
     else for_each(threads, n, function, min_parallel(grain));
 }
 

@@ -248,7 +248,7 @@ TETISO_HD bool place_samples(const RoundView& m, const EdgeSlots& r, const NewFa
                 }
             }
             worst = std::max(worst, base + d);
-            visit(sample, fan.tri(at));
+            visit(sample, fan.tri[at]);
         }
     });
     return placed;

@@ -207,10 +207,10 @@ TETISO_HD inline bool touch(const Corners& f, const Corners& g) {
 
 // New face f of a collapse, and the face it replaces.
 TETISO_HD inline Corners new_face(const NewFan& fan, int f) {
-    return {{-1, fan.ia(f), fan.ib(f)}, {fan.p, fan.a(f), fan.b(f)}, fan.n(f)};
+    return {{-1, fan.ia[f], fan.ib[f]}, {fan.p, fan.a(f), fan.b(f)}, fan.n[f]};
 }
 TETISO_HD inline Corners old_face(const RoundView& m, const NewFan& fan, int f) {
-    Corners c{{fan.end(f), fan.ia(f), fan.ib(f)}, {m.s.pos(fan.end(f)), fan.a(f), fan.b(f)}, {0, 0, 0}};
+    Corners c{{fan.end[f], fan.ia[f], fan.ib[f]}, {m.s.pos(fan.end[f]), fan.a(f), fan.b(f)}, {0, 0, 0}};
     quality(c.at[0], c.at[1], c.at[2], &c.n);
     return c;
 }
@@ -224,18 +224,17 @@ TETISO_HD inline Corners old_face(const RoundView& m, const NewFan& fan, int f) 
 // more than once holds its first side twice.
 TETISO_HD inline bool fan_at_p_embedded(const NewFan& fan) {
     Vec m{0, 0, 0};
-    for (int f = 0; f < fan.count; ++f) m = m + fan.n(f);
+    for (int f = 0; f < fan.count; ++f) m = m + fan.n[f];
     const double len = norm(m);
     if (!(len > 0)) return false;
     m = (1.0 / len) * m;
     for (int f = 0; f < fan.count; ++f)
-        if (!(dot(fan.n(f), m) > kConeMargin)) return false;
+        if (!(dot(fan.n[f], m) > kConeMargin)) return false;
     int first = 0; // on the border: the face whose first side no face ends on
     bool open = false;
     for (int f = 0; f < fan.count && !open; ++f) {
-        const i32 a = fan.ia(f);
         bool follows = false;
-        for (int g = 0; g < fan.count && !follows; ++g) follows = fan.ib(g) == a;
+        for (int g = 0; g < fan.count && !follows; ++g) follows = fan.ib[g] == fan.ia[f];
         if (!follows) first = f, open = true;
     }
     Vec ray = fan.a(first) - fan.p;
@@ -254,15 +253,9 @@ TETISO_HD inline bool fan_at_p_embedded(const NewFan& fan) {
 // face around v that the collapse leaves as it is, against each new face at
 // v.
 TETISO_HD inline bool ring_clear(const RoundView& m, i32 u, i32 w, const NewFan& fan, i32 v) {
-    // The (at most two) new faces at v and their normals, in registers: no
-    // array indexed at run time (see NewFan).
-    int at_v0 = -1, at_v1 = -1;
-    Vec n_v0{0, 0, 0}, n_v1{0, 0, 0};
-    for (int f = 0; f < fan.count && at_v1 < 0; ++f)
-        if (fan.ia(f) == v || fan.ib(f) == v) {
-            if (at_v0 < 0) at_v0 = f, n_v0 = fan.n(f);
-            else at_v1 = f, n_v1 = fan.n(f);
-        }
+    int at_v[2], n_at_v = 0;
+    for (int f = 0; f < fan.count && n_at_v < 2; ++f)
+        if (fan.ia[f] == v || fan.ib[f] == v) at_v[n_at_v++] = f;
     const Vec pv = m.s.pos(v);
     const i32 begin = m.fans.off[v], end = m.fans.off[v + 1];
     for (i32 slot = begin; slot < end; ++slot) {
@@ -270,24 +263,22 @@ TETISO_HD inline bool ring_clear(const RoundView& m, i32 u, i32 w, const NewFan&
         const i32 y = m.fans.prev[slot];
         if (x == u || x == w || y == u || y == w) continue; // a face the collapse replaces
         const Vec px = m.s.pos(x), py = m.s.pos(y);
-        for (int j = 0; j < 2; ++j) {
-            const int h = j == 0 ? at_v0 : at_v1;
-            if (h < 0) break;
-            const Vec nh = j == 0 ? n_v0 : n_v1;
-            if (norm2(nh) == 0) continue;
-            const i32 o = fan.ia(h) == v ? fan.ib(h) : fan.ia(h);
-            const Vec po = fan.ia(h) == v ? fan.b(h) : fan.a(h);
+        for (int j = 0; j < n_at_v; ++j) {
+            const int h = at_v[j];
+            if (norm2(fan.n[h]) == 0) continue;
+            const i32 o = fan.ia[h] == v ? fan.ib[h] : fan.ia[h];
+            const Vec po = fan.ia[h] == v ? fan.b(h) : fan.a(h);
             bool overlap;
             if (x == o || y == o) {
                 // Across the edge (v, o): only a face folded flat onto h.
                 const Vec third = x == o ? py : px;
-                overlap = overlap_at_edge(pv, po, fan.p, nh, third) &&
-                          !overlap_at_edge(pv, po, m.s.pos(fan.end(h)), old_face(m, fan, h).n, third);
+                overlap = overlap_at_edge(pv, po, fan.p, fan.n[h], third) &&
+                          !overlap_at_edge(pv, po, m.s.pos(fan.end[h]), old_face(m, fan, h).n, third);
             } else {
-                if (apart(pv, nh, px, py)) continue;
+                if (apart(pv, fan.n[h], px, py)) continue;
                 Vec ng;
                 if (!(quality(pv, px, py, &ng) > 0)) continue;
-                overlap = overlap_at_corner(pv, fan.p, po, nh, px, py, ng) &&
+                overlap = overlap_at_corner(pv, fan.p, po, fan.n[h], px, py, ng) &&
                           !touch(old_face(m, fan, h), Corners{{v, x, y}, {pv, px, py}, ng});
             }
             if (overlap) return false;
@@ -307,9 +298,9 @@ TETISO_HD inline bool ring_clear(const RoundView& m, i32 u, i32 w, const NewFan&
 TETISO_HD inline bool clear_of_neighbours(const RoundView& m, i32 u, i32 w, bool border_edge, const NewFan& fan) {
     if (!fan_at_p_embedded(fan))
         for (int f = 0; f < fan.count; ++f) {
-            if (norm2(fan.n(f)) == 0) continue;
+            if (norm2(fan.n[f]) == 0) continue;
             for (int g = f + 1; g < fan.count; ++g)
-                if (!apart(fan.p, fan.n(f), fan.a(g), fan.b(g)) && touch(new_face(fan, f), new_face(fan, g)) &&
+                if (!apart(fan.p, fan.n[f], fan.a(g), fan.b(g)) && touch(new_face(fan, f), new_face(fan, g)) &&
                     !touch(old_face(m, fan, f), old_face(m, fan, g)))
                     return false;
         }
@@ -322,16 +313,14 @@ TETISO_HD inline bool clear_of_neighbours(const RoundView& m, i32 u, i32 w, bool
     // reduction of the N = 100 paper surface), as the cone argument needs
     // every operation at that corner to keep to it.
     const i32 moved_a = border_edge ? m.border_other(u, w) : -1, moved_b = border_edge ? m.border_other(w, u) : -1;
-    for (int f = 0; f < fan.count; ++f) {
-        const Vec n = fan.n(f);
-        for (const i32 v : {fan.ia(f), fan.ib(f)}) {
+    for (int f = 0; f < fan.count; ++f)
+        for (const i32 v : {fan.ia[f], fan.ib[f]}) {
             if (v == moved_a || v == moved_b || !m.cones[v].flat) {
                 if (!ring_clear(m, u, w, fan, v)) return false;
-            } else if (!inside_cone(m, v, n)) {
+            } else if (!inside_cone(m, v, fan.n[f])) {
                 return false;
             }
         }
-    }
     return true;
 }
 
@@ -441,7 +430,9 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
     // it) in the N = 100 paper surface.
     const bool removes_valence3 = priority_class(ops.priority[i]) == kClassValence3;
     // New faces: (p, next, prev) for every other face of both leaves.
-    NewFan fan(m.s, m.fans, r, p);
+    NewFan fan;
+    fan.p = p;
+    fan.xyz = m.s.xyz;
     int faces = 0;
     bool spoiled = false;
     for_each_leaf_face(r, [&](i32 slot, bool removed) {
@@ -470,7 +461,13 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
         spoiled = moves && (q_new < q_floor || (!(q_new > 0) && g.valid()) ||
                             (g.valid() ? q_new > 0 && !removes_valence3 && dot(n, g.n()) < m.p.cos_turn
                                        : resolved(p, a, b) && dot(n, nsum) < 0));
-        fan.keep_normal(faces, n);
+        if (faces < NewFan::kMax) {
+            fan.n[faces] = n;
+            fan.ia[faces] = ia;
+            fan.ib[faces] = ib;
+            fan.end[faces] = end;
+            fan.tri[faces] = m.face(slot);
+        }
         ++faces;
     });
     if (spoiled || faces > NewFan::kMax) return false;

@@ -126,93 +126,29 @@ TETISO_HD void for_each_leaf_face(const EdgeSlots& r, const F& f) {
         if (j != r.wf1 && j != r.wf2) f(r.ow + j, false);
 }
 
-// The unit normal of triangle (a, b, c), zero when degenerate: quality()'s
-// normal, computed by the same operations in the same order, so the same
-// bits.
-TETISO_HD inline Vec unit_normal(Vec a, Vec b, Vec c) {
-    const Vec ab = b - a;
-    const Vec n = cross(ab, c - a);
-    const double area2 = norm(n);
-    return area2 > 0 ? (1.0 / area2) * n : Vec{0, 0, 0};
-}
-
-// The faces a collapse makes: (p, a(f), b(f)), which replace triangle tri(f)
-// (the same index: apply rewrites triangles in place), for every face of
-// both leaves but the two removed, in for_each_leaf_face's order. Face f is
-// found from f by the slots of the two fans (slot(f)), and its corners are
-// read from the surface: a test keeps no array per face. On the device an
-// array per face lives in each thread's local memory, which the driver
-// reserves for every thread the GPU can hold, and the tests' loops read it
-// back from there, far slower than the fans and positions they read
-// anyway; so there the normals too are computed again where they are read.
-// The host keeps them (one computation each).
-#ifndef TETISO_FAN_RECOMPUTE
-#define TETISO_FAN_RECOMPUTE 0
-#endif
+// The faces a collapse makes: (p, a(f), b(f)), which replace triangle tri[f]
+// (the same index: apply rewrites triangles in place). A test's largest
+// record (on the stack; on the GPU each thread's local memory, which the
+// driver reserves for every thread the device can hold). The other corners
+// are vertices of the surface, read from its positions where needed rather
+// than kept: what a test keeps in local memory it reads back from there,
+// and the positions are shared by every test in the caches.
 struct NewFan {
     static constexpr int kMax = 96;
     Vec p;
+    const float* xyz; // the surface's positions
+    Vec n[kMax];      // unit normal, zero when degenerate
+    i32 ia[kMax], ib[kMax], tri[kMax];
+    i32 end[kMax]; // the end, u or w, whose place p takes in this face
     int count = 0;
-
-    TETISO_HD NewFan(const SurfaceView& s, const FansView& fans, const EdgeSlots& r, Vec p_new)
-        : p(p_new), xyz_(s.xyz), next_(fans.next), prev_(fans.prev), face_(fans.face), u_(r.u), w_(r.w), ou_(r.ou),
-          ow_(r.ow) {
-        removed_in_order(r.uf1, r.uf2, ru_);
-        removed_in_order(r.wf1, r.wf2, rw_);
-        kept_u_ = r.ku - (ru_[0] != kNoSlot) - (ru_[1] != kNoSlot);
-    }
-
-    // The slot, in u's or w's fan, of the face that new face f replaces.
-    TETISO_HD i32 slot(int f) const {
-        const bool at_u = f < kept_u_;
-        const i32* removed = at_u ? ru_ : rw_;
-        i32 j = at_u ? f : f - kept_u_;
-        if (j >= removed[0]) ++j;
-        if (j >= removed[1]) ++j;
-        return (at_u ? ou_ : ow_) + j;
-    }
-    TETISO_HD i32 ia(int f) const { return next_[slot(f)]; }
-    TETISO_HD i32 ib(int f) const { return prev_[slot(f)]; }
-    TETISO_HD i32 tri(int f) const { return face_[slot(f)]; }
-    // The end, u or w, whose place p takes in face f.
-    TETISO_HD i32 end(int f) const { return f < kept_u_ ? u_ : w_; }
-    TETISO_HD Vec a(int f) const { return position(ia(f)); }
-    TETISO_HD Vec b(int f) const { return position(ib(f)); }
-    // Unit normal of new face f, zero when degenerate.
-    TETISO_HD Vec n(int f) const {
-#if defined(__CUDA_ARCH__) && TETISO_FAN_RECOMPUTE
-        return unit_normal(p, a(f), b(f));
-#else
-        return n_[f];
-#endif
-    }
-    // Face f's normal, as the test that builds the fan found it.
-    TETISO_HD void keep_normal([[maybe_unused]] int f, [[maybe_unused]] Vec n) {
-#if !(defined(__CUDA_ARCH__) && TETISO_FAN_RECOMPUTE)
-        if (f < kMax) n_[f] = n;
-#endif
-    }
+    TETISO_HD Vec a(int f) const { return position(ia[f]); }
+    TETISO_HD Vec b(int f) const { return position(ib[f]); }
 
 private:
-    static constexpr i32 kNoSlot = 0x7fffffff;
-    // The removed slots' indices, ascending, kNoSlot for none.
-    TETISO_HD static void removed_in_order(i32 x, i32 y, i32* out) {
-        if (x < 0) x = kNoSlot;
-        if (y < 0 || y == x) y = kNoSlot;
-        out[0] = x < y ? x : y;
-        out[1] = x < y ? y : x;
-    }
     TETISO_HD Vec position(i32 v) const {
-        const float* q = xyz_ + 3 * static_cast<std::size_t>(v);
+        const float* q = xyz + 3 * static_cast<std::size_t>(v);
         return {q[0], q[1], q[2]};
     }
-    const float* xyz_; // the surface's positions
-    const i32 *next_, *prev_, *face_;
-    i32 u_, w_, ou_, ow_, kept_u_;
-    i32 ru_[2], rw_[2];
-#if !(defined(__CUDA_ARCH__) && TETISO_FAN_RECOMPUTE)
-    Vec n_[kMax];
-#endif
 };
 
 } // namespace tetiso::reduction

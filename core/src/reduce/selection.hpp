@@ -260,16 +260,16 @@ void choose_in_order(Selection<Exec>& sel, const SelectView& v, i32 n, u8* chose
 // kTallyActive: the pieces of a batch not finished after the round.
 enum TallySlot : int { kTallyEvaluated, kTallyCollapses, kTallyFlips, kTallyChanged, kTallyDrySurvivors, kTallyActive };
 
+// The groups of dry_run_all's survivors by leaf faces: one per count below
+// it, the rest together.
+constexpr i32 kFanGroups = 32;
+
 // Speculation's dry runs: every collapse of the round tested on its state,
 // its samples placed one a thread (the tests of a collapse are a few hundred
 // steps, its samples' placement as many again for each sample, which late
 // rounds have dozens of a face: on the GPU one thread placing them all
 // would be the round's slowest). outcome[rank]: kOutcomeUndecided where
 // legal, else kOutcomeIllegal; the dry proposal's bound in dry.err.
-// The groups of dry_run_all's survivors by leaf faces: one per count below
-// it, the rest together.
-constexpr i32 kFanGroups = 32;
-
 template <class Exec, class Test>
 void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
     using Grain = typename Exec::Grain;
@@ -296,13 +296,18 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
     exec.filter_into(n, [=] TETISO_HD(i64 k) { return outcome[k] == kOutcomeUndecided; }, sel.dry_survivors,
                      kTallyDrySurvivors);
     const i32* survivors = sel.dry_survivors.data();
-    // The survivors grouped by the faces of their leaves (the rest after
-    // them), so that threads side by side loop over as many faces: the
-    // geometric tests' loops run over the fan.
-    exec.group_by_key(n, kFanGroups + 1, [=] TETISO_HD(i64 k) {
-        return outcome[k] != kOutcomeUndecided ? kFanGroups : std::min(test.leaf_faces(order[k]), kFanGroups - 1);
-    }, sel.fan_first, sel.by_fan, sel.fan_scratch);
-    const i32* by_fan = sel.by_fan.data();
+    // On the device, the survivors grouped by the faces of their leaves (the
+    // rest after them), so that a warp's threads loop over as many faces:
+    // the geometric tests' loops run over the fan. (The host's grouping
+    // sorts each group's run, made for short runs: these are long, and a
+    // host thread gains nothing from the order.)
+    const i32* by_fan = survivors;
+    if constexpr (!Exec::kHost) {
+        exec.group_by_key(n, kFanGroups + 1, [=] TETISO_HD(i64 k) {
+            return outcome[k] != kOutcomeUndecided ? kFanGroups : std::min(test.leaf_faces(order[k]), kFanGroups - 1);
+        }, sel.fan_first, sel.by_fan, sel.fan_scratch);
+        by_fan = sel.by_fan.data();
+    }
     exec.for_each_of(exec.tally_at(kTallyDrySurvivors), n, [=] TETISO_HD(i64 j) {
         const i32 k = by_fan[j], e = order[k];
         // Always a place for the bound (the test reads it only with
@@ -324,9 +329,8 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
     i32 *item_rank = sel.item_rank.data(), *item_sample = sel.item_sample.data(),
         *item_triangle = sel.item_triangle.data();
     // Each legal collapse lists its samples, so that a sample's thread finds
-    // its collapse and its face in one read each, and threads side by side
-    // run the same steps: the distance to the sample's own face, which keeps
-    // most samples.
+    // its collapse and its face in one read each, rather than by a binary
+    // search over the ranks and a walk of the leaves.
     exec.for_each_of(exec.tally_at(kTallyDrySurvivors), n, [=] TETISO_HD(i64 j) {
         const i32 k = survivors[j];
         if (count[k] == 0) return;
@@ -338,6 +342,8 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
             ++item;
         });
     }, Grain::kTests);
+    // Not Grain::kTests: held to the tests' registers, the device's kernel
+    // spilled its loop over the faces to local memory.
     exec.for_each(sel.items, [=] TETISO_HD(i64 item) {
         const i32 k = item_rank[item];
         const LeafSamplePlacement placed = test.place(order[k], item_sample[item], item_triangle[item]);
@@ -345,7 +351,7 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
         // Bounds are not negative: their bits order as they do.
         if (placed.triangle < 0) hd::atomic_store(outcome + k, kOutcomeIllegal);
         else hd::atomic_max(worst + k, hd::bits(placed.bound));
-    }, Grain::kSamples);
+    });
     exec.for_each(n, [=] TETISO_HD(i64 k) {
         if (outcome[k] == kOutcomeUndecided) test.dry.err[order[k]] = static_cast<float>(hd::from_bits(worst[k]));
     });
