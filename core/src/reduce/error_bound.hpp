@@ -286,26 +286,26 @@ struct LeafSamplePlacement {
 // and own_slot), placed by itself: the same distances, compared in the same
 // order, as place_samples computes for it, so that placing the samples of
 // one collapse on as many threads gives place_samples' placements and, as
-// the largest of the bounds, its worst. The leaves are walked only for a
-// sample that its own face does not keep.
-TETISO_HD inline LeafSamplePlacement place_leaf_sample(const RoundView& m, i32 e, Vec p, i32 sample, i32 own_slot) {
+// the largest of the bounds, its worst. In two steps: the face that
+// replaces its own (which keeps most samples), and only where that is too
+// far, the nearest new face.
+TETISO_HD inline bool place_on_own_face(const RoundView& m, Vec p, i32 sample, i32 own_slot,
+                                        LeafSamplePlacement& placed) {
+    if (own_slot < 0) return false;
+    const double d = sample_distance(m.samples, sample, p, m.s.pos(m.fans.next[own_slot]),
+                                     m.s.pos(m.fans.prev[own_slot]));
+    const double bound = m.samples.point[sample].base + d;
+    if (!(bound <= m.p.max_error)) return false;
+    placed = {sample, m.face(own_slot), bound};
+    return true;
+}
+TETISO_HD inline LeafSamplePlacement place_on_nearest_face(const RoundView& m, i32 e, Vec p, i32 sample) {
     const double base = m.samples.point[sample].base;
-    const auto corners = [&](i32 slot, Vec& a, Vec& b) {
-        a = m.s.pos(m.fans.next[slot]);
-        b = m.s.pos(m.fans.prev[slot]);
-    };
-    Vec a, b;
-    if (own_slot >= 0) {
-        corners(own_slot, a, b);
-        const double d = sample_distance(m.samples, sample, p, a, b);
-        if (base + d <= m.p.max_error) return {sample, m.face(own_slot), base + d};
-    }
     double d = std::numeric_limits<double>::infinity();
     i32 at = -1;
     for_each_leaf_face(slots(m, e), [&](i32 slot, bool removed) {
         if (removed) return;
-        corners(slot, a, b);
-        const double df = sample_distance(m.samples, sample, p, a, b);
+        const double df = sample_distance(m.samples, sample, p, m.s.pos(m.fans.next[slot]), m.s.pos(m.fans.prev[slot]));
         if (df < d) {
             d = df;
             at = m.face(slot);

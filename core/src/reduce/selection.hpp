@@ -167,9 +167,13 @@ struct CollapseTest {
     TETISO_HD void for_each_sample(i32 e, const Visit& visit) const {
         for_each_leaf_sample(m, slots(m, e), visit);
     }
-    // A sample of the leaves of dry-run collapse e, placed.
-    TETISO_HD LeafSamplePlacement place(i32 e, i32 sample, i32 own_slot) const {
-        return place_leaf_sample(m, e, {dry.px[e], dry.py[e], dry.pz[e]}, sample, own_slot);
+    // A sample of the leaves of dry-run collapse e, placed on the face that
+    // replaces its own (false: too far from it), or on the nearest.
+    TETISO_HD bool place_on_own(i32 e, i32 sample, i32 own_slot, LeafSamplePlacement& placed) const {
+        return place_on_own_face(m, {dry.px[e], dry.py[e], dry.pz[e]}, sample, own_slot, placed);
+    }
+    TETISO_HD LeafSamplePlacement place_on_nearest(i32 e, i32 sample) const {
+        return place_on_nearest_face(m, e, {dry.px[e], dry.py[e], dry.pz[e]}, sample);
     }
     // What the real test of e would have written of its proposal: the dry
     // run's, with the new faces' bound where it chose e.
@@ -210,6 +214,7 @@ struct Selection {
     // (before it is placed: the slot of the face it lies on, -1 for a face
     // the collapse removes).
     Array<i32> sample_count, sample_first, item_rank, item_sample, item_triangle;
+    Array<i32> far_items; // the items their own face does not keep
     Array<u64> worst_bits;
     i32 items = 0;
     bool speculate = !Exec::kHost;
@@ -258,7 +263,16 @@ void choose_in_order(Selection<Exec>& sel, const SelectView& v, i32 n, u8* chose
 // The counts of a round that CudaExec keeps on the device (the slots of
 // Exec::count_into, filter_into).
 // kTallyActive: the pieces of a batch not finished after the round.
-enum TallySlot : int { kTallyEvaluated, kTallyCollapses, kTallyFlips, kTallyChanged, kTallyDrySurvivors, kTallyActive };
+// kTallyFarSamples: the dry runs' samples too far from their own face.
+enum TallySlot : int {
+    kTallyEvaluated,
+    kTallyCollapses,
+    kTallyFlips,
+    kTallyChanged,
+    kTallyDrySurvivors,
+    kTallyActive,
+    kTallyFarSamples
+};
 
 // The groups of dry_run_all's survivors by leaf faces: one per count below
 // it, the rest together.
@@ -342,13 +356,30 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
             ++item;
         });
     }, Grain::kTests);
-    // Not Grain::kTests: held to the tests' registers, the device's kernel
-    // spilled its loop over the faces to local memory.
+    // Each sample on the face that replaces its own where that keeps it;
+    // the others, listed, on the nearest face: a warp's threads then all
+    // measure one face, or all loop over the leaves. (Not Grain::kTests:
+    // held to the tests' registers, the device's kernels spilled the
+    // distances to local memory.)
+    constexpr i32 kFar = -2;
     exec.for_each(sel.items, [=] TETISO_HD(i64 item) {
         const i32 k = item_rank[item];
-        const LeafSamplePlacement placed = test.place(order[k], item_sample[item], item_triangle[item]);
+        LeafSamplePlacement placed;
+        if (!test.place_on_own(order[k], item_sample[item], item_triangle[item], placed)) {
+            item_triangle[item] = kFar;
+            return;
+        }
         item_triangle[item] = placed.triangle;
         // Bounds are not negative: their bits order as they do.
+        hd::atomic_max(worst + k, hd::bits(placed.bound));
+    });
+    exec.filter_into(sel.items, [=] TETISO_HD(i64 item) { return item_triangle[item] == kFar; }, sel.far_items,
+                     kTallyFarSamples);
+    const i32* far_items = sel.far_items.data();
+    exec.for_each_of(exec.tally_at(kTallyFarSamples), sel.items, [=] TETISO_HD(i64 j) {
+        const i32 item = far_items[j], k = item_rank[item];
+        const LeafSamplePlacement placed = test.place_on_nearest(order[k], item_sample[item]);
+        item_triangle[item] = placed.triangle;
         if (placed.triangle < 0) hd::atomic_store(outcome + k, kOutcomeIllegal);
         else hd::atomic_max(worst + k, hd::bits(placed.bound));
     });
