@@ -160,9 +160,20 @@ struct CollapseTest {
     }
     TETISO_HD bool samples_on() const { return m.samples.on; }
     TETISO_HD i32 leaf_samples(i32 e) const { return leaf_sample_count(m, slots(m, e)); }
-    // Sample j of the leaves of dry-run collapse e.
-    TETISO_HD LeafSamplePlacement place(i32 e, i32 j) const {
-        return place_leaf_sample(m, slots(m, e), {dry.px[e], dry.py[e], dry.pz[e]}, j);
+    // The faces of both ends' fans of collapse e.
+    TETISO_HD i32 leaf_faces(i32 e) const { return m.fans.k(m.edges.v0[e]) + m.fans.k(m.edges.v1[e]); }
+    // visit(sample, own_slot) for the samples of the leaves of collapse e.
+    template <class Visit>
+    TETISO_HD void for_each_sample(i32 e, const Visit& visit) const {
+        for_each_leaf_sample(m, slots(m, e), visit);
+    }
+    // A sample of the leaves of dry-run collapse e, placed on the face that
+    // replaces its own (false: too far from it), or on the nearest.
+    TETISO_HD bool place_on_own(i32 e, i32 sample, i32 own_slot, LeafSamplePlacement& placed) const {
+        return place_on_own_face(m, {dry.px[e], dry.py[e], dry.pz[e]}, sample, own_slot, placed);
+    }
+    TETISO_HD LeafSamplePlacement place_on_nearest(i32 e, i32 sample) const {
+        return place_on_nearest_face(m, e, {dry.px[e], dry.py[e], dry.pz[e]}, sample);
     }
     // What the real test of e would have written of its proposal: the dry
     // run's, with the new faces' bound where it chose e.
@@ -197,9 +208,13 @@ struct Selection {
     Array<u8> outcome;
     Array<i32> entrants, claim_rank;
     Array<i32> dry_survivors; // the ranks whose dry run passed its first stage
+    Array<i32> by_fan, fan_first, fan_scratch; // the same by the faces of their leaves (dry_run_all)
     // The samples of the dry runs' leaves, one item each: per rank its
-    // first item and bound, per item the sample and where it goes.
-    Array<i32> sample_count, sample_first, item_sample, item_triangle;
+    // first item and bound, per item its rank, the sample and where it goes
+    // (before it is placed: the slot of the face it lies on, -1 for a face
+    // the collapse removes).
+    Array<i32> sample_count, sample_first, item_rank, item_sample, item_triangle;
+    Array<i32> far_items; // the items their own face does not keep
     Array<u64> worst_bits;
     i32 items = 0;
     bool speculate = !Exec::kHost;
@@ -245,22 +260,23 @@ void choose_in_order(Selection<Exec>& sel, const SelectView& v, i32 n, u8* chose
     }
 }
 
-// The rank whose items (sample_first, an exclusive scan of n + 1 entries)
-// hold item.
-TETISO_HD inline i32 rank_of_item(const i32* first, i32 n, i32 item) {
-    i32 low = 0, high = n; // first[low] <= item < first[high]
-    while (high - low > 1) {
-        const i32 mid = low + (high - low) / 2;
-        if (first[mid] <= item) low = mid;
-        else high = mid;
-    }
-    return low;
-}
-
 // The counts of a round that CudaExec keeps on the device (the slots of
 // Exec::count_into, filter_into).
 // kTallyActive: the pieces of a batch not finished after the round.
-enum TallySlot : int { kTallyEvaluated, kTallyCollapses, kTallyFlips, kTallyChanged, kTallyDrySurvivors, kTallyActive };
+// kTallyFarSamples: the dry runs' samples too far from their own face.
+enum TallySlot : int {
+    kTallyEvaluated,
+    kTallyCollapses,
+    kTallyFlips,
+    kTallyChanged,
+    kTallyDrySurvivors,
+    kTallyActive,
+    kTallyFarSamples
+};
+
+// The groups of dry_run_all's survivors by leaf faces: one per count below
+// it, the rest together.
+constexpr i32 kFanGroups = 32;
 
 // Speculation's dry runs: every collapse of the round tested on its state,
 // its samples placed one a thread (the tests of a collapse are a few hundred
@@ -294,10 +310,25 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
     exec.filter_into(n, [=] TETISO_HD(i64 k) { return outcome[k] == kOutcomeUndecided; }, sel.dry_survivors,
                      kTallyDrySurvivors);
     const i32* survivors = sel.dry_survivors.data();
+    // On the device, the survivors grouped by the faces of their leaves (the
+    // rest after them), so that a warp's threads loop over as many faces:
+    // the geometric tests' loops run over the fan. (The host's grouping
+    // sorts each group's run, made for short runs: these are long, and a
+    // host thread gains nothing from the order.)
+    const i32* by_fan = survivors;
+    if constexpr (!Exec::kHost) {
+        exec.group_by_key(n, kFanGroups + 1, [=] TETISO_HD(i64 k) {
+            return outcome[k] != kOutcomeUndecided ? kFanGroups : std::min(test.leaf_faces(order[k]), kFanGroups - 1);
+        }, sel.fan_first, sel.by_fan, sel.fan_scratch);
+        by_fan = sel.by_fan.data();
+    }
     exec.for_each_of(exec.tally_at(kTallyDrySurvivors), n, [=] TETISO_HD(i64 j) {
-        const i32 k = survivors[j], e = order[k];
+        const i32 k = by_fan[j], e = order[k];
+        // Always a place for the bound (the test reads it only with
+        // samples): the compiler then leaves out the test's path that places
+        // the samples itself, with its registers and stack.
         double deferred = 0.0;
-        const bool legal = test.dry_run_rest(e, samples ? &deferred : nullptr) == Verdict::kLegal;
+        const bool legal = test.dry_run_rest(e, &deferred) == Verdict::kLegal;
         outcome[k] = legal ? kOutcomeUndecided : kOutcomeIllegal;
         if (!samples) return;
         worst[k] = hd::bits(deferred);
@@ -306,19 +337,52 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
     sel.items = 0;
     if (!samples) return;
     sel.items = exec.exclusive_scan(sel.sample_count, n, sel.sample_first);
-    sel.item_sample.resize(static_cast<std::size_t>(sel.items));
-    sel.item_triangle.resize(static_cast<std::size_t>(sel.items));
+    for (auto* items : {&sel.item_rank, &sel.item_sample, &sel.item_triangle})
+        items->resize(static_cast<std::size_t>(sel.items));
     const i32* first = sel.sample_first.data();
-    i32 *item_sample = sel.item_sample.data(), *item_triangle = sel.item_triangle.data();
+    i32 *item_rank = sel.item_rank.data(), *item_sample = sel.item_sample.data(),
+        *item_triangle = sel.item_triangle.data();
+    // Each legal collapse lists its samples, so that a sample's thread finds
+    // its collapse and its face in one read each, rather than by a binary
+    // search over the ranks and a walk of the leaves.
+    exec.for_each_of(exec.tally_at(kTallyDrySurvivors), n, [=] TETISO_HD(i64 j) {
+        const i32 k = survivors[j];
+        if (count[k] == 0) return;
+        i32 item = first[k];
+        test.for_each_sample(order[k], [&](i32 sample, i32 own_slot) {
+            item_rank[item] = k;
+            item_sample[item] = sample;
+            item_triangle[item] = own_slot;
+            ++item;
+        });
+    }, Grain::kTests);
+    // Each sample on the face that replaces its own where that keeps it;
+    // the others, listed, on the nearest face: a warp's threads then all
+    // measure one face, or all loop over the leaves. (Not Grain::kTests:
+    // held to the tests' registers, the device's kernels spilled the
+    // distances to local memory.)
+    constexpr i32 kFar = -2;
     exec.for_each(sel.items, [=] TETISO_HD(i64 item) {
-        const i32 k = rank_of_item(first, n, static_cast<i32>(item));
-        const LeafSamplePlacement placed = test.place(order[k], static_cast<i32>(item) - first[k]);
-        item_sample[item] = placed.sample;
+        const i32 k = item_rank[item];
+        LeafSamplePlacement placed;
+        if (!test.place_on_own(order[k], item_sample[item], item_triangle[item], placed)) {
+            item_triangle[item] = kFar;
+            return;
+        }
         item_triangle[item] = placed.triangle;
         // Bounds are not negative: their bits order as they do.
+        hd::atomic_max(worst + k, hd::bits(placed.bound));
+    });
+    exec.filter_into(sel.items, [=] TETISO_HD(i64 item) { return item_triangle[item] == kFar; }, sel.far_items,
+                     kTallyFarSamples);
+    const i32* far_items = sel.far_items.data();
+    exec.for_each_of(exec.tally_at(kTallyFarSamples), sel.items, [=] TETISO_HD(i64 j) {
+        const i32 item = far_items[j], k = item_rank[item];
+        const LeafSamplePlacement placed = test.place_on_nearest(order[k], item_sample[item]);
+        item_triangle[item] = placed.triangle;
         if (placed.triangle < 0) hd::atomic_store(outcome + k, kOutcomeIllegal);
         else hd::atomic_max(worst + k, hd::bits(placed.bound));
-    }, Grain::kTests);
+    });
     exec.for_each(n, [=] TETISO_HD(i64 k) {
         if (outcome[k] == kOutcomeUndecided) test.dry.err[order[k]] = static_cast<float>(hd::from_bits(worst[k]));
     });
@@ -526,12 +590,11 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
             test.adopt(e, what == kOutcomeChosen);
         });
         if (sel.items > 0 && test.samples_on()) {
-            const i32* first = sel.sample_first.data();
-            const i32 *item_sample = sel.item_sample.data(), *item_triangle = sel.item_triangle.data();
+            const i32 *item_rank = sel.item_rank.data(), *item_sample = sel.item_sample.data(),
+                      *item_triangle = sel.item_triangle.data();
             i32* owner = test.owner;
             exec.for_each(sel.items, [=] TETISO_HD(i64 item) {
-                if (outcome[rank_of_item(first, n, static_cast<i32>(item))] == kOutcomeChosen)
-                    owner[item_sample[item]] = item_triangle[item];
+                if (outcome[item_rank[item]] == kOutcomeChosen) owner[item_sample[item]] = item_triangle[item];
             });
         }
     }
