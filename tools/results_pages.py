@@ -402,6 +402,10 @@ def paper_reproduction(folder):
         checks=table(["domains", "triangles", "components", "signature", "manifold", "non-manifold edges / vertices",
                       "consistently oriented", "degenerate", "angles < 1°", "smallest angle", "self-intersections"],
                      check_rows),
+        # A check made apart from the sweep (a later commit's surface, the
+        # same bytes for any rank count) says where it comes from.
+        check_sources="".join(f"\n{source}\n" for source in sorted({c["source"] for c in checks.values()
+                                                                        if "source" in c})),
         factors=table(["domains", "P", "efficiency", "task inflation", "utilisation"], factors),
         bandwidth=table(["threads", "copy GB/s", "triad GB/s", "triad per thread / 1 thread's"],
                         [[t, f"{x['copy_gb_s']:,.1f}", f"{x['triad_gb_s']:,.1f}",
