@@ -26,6 +26,7 @@
 #include <utility>
 #include <vector>
 
+#include <cooperative_groups.h>
 #include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_reduce.cuh>
 #include <cub/device/device_scan.cuh>
@@ -64,6 +65,31 @@ __global__ void __launch_bounds__(cuda::kBlock, 3)
     for (std::int64_t i = blockIdx.x * static_cast<std::int64_t>(blockDim.x) + threadIdx.x; i < count;
          i += static_cast<std::int64_t>(gridDim.x) * blockDim.x)
         function(i);
+}
+
+// A device-side loop of steps, each two passes over a list whose size the
+// previous step left in device memory (CudaExec::run_steps): one cooperative
+// grid, every block resident, a grid-wide barrier between the passes and
+// after each step, until a step finds the list empty. The size is read by
+// every thread after the barrier, so all leave the loop together.
+template <class First, class Second>
+__global__ void __launch_bounds__(cuda::kBlock)
+    steps_kernel(std::int64_t* sizes, int current, std::uint32_t step, First first, Second second, std::int64_t* steps_run) {
+    cooperative_groups::grid_group grid = cooperative_groups::this_grid();
+    const std::int64_t stride = static_cast<std::int64_t>(gridDim.x) * blockDim.x;
+    const std::int64_t start = blockIdx.x * static_cast<std::int64_t>(blockDim.x) + threadIdx.x;
+    std::int64_t steps = 0;
+    for (;; current = 1 - current) {
+        const std::int64_t n = *static_cast<volatile std::int64_t*>(sizes + current);
+        if (n == 0) break;
+        ++step;
+        ++steps;
+        for (std::int64_t i = start; i < n; i += stride) first(i, step, current);
+        grid.sync();
+        for (std::int64_t i = start; i < n; i += stride) second(i, step, current);
+        grid.sync();
+    }
+    if (start == 0) *steps_run = steps;
 }
 
 // An index's count for a scan of n + 1 entries: count(i), 0 at n.
@@ -127,7 +153,8 @@ public:
         cuda::check(cudaGetDevice(&device), "cudaGetDevice");
         cuda::check(cudaDeviceGetAttribute(&processors, cudaDevAttrMultiProcessorCount, device), "cudaDeviceGetAttribute");
         // 2048 threads a multiprocessor: 8 blocks of kBlock.
-        resident_blocks_ = static_cast<unsigned>(std::max(1, processors)) * (2048 / cuda::kBlock);
+        processors_ = static_cast<unsigned>(std::max(1, processors));
+        resident_blocks_ = processors_ * (2048 / cuda::kBlock);
         test_blocks_ = static_cast<unsigned>(std::max(1, processors)) * tests_blocks_per_processor();
         cuda::check(cudaMallocHost(reinterpret_cast<void**>(&pinned_), sizeof(i64) * (kScalars + kTallySlots)),
                     "cudaMallocHost");
@@ -204,6 +231,40 @@ public:
     // empty launches.
     static int steps_between_checks() { return 8; }
 
+    // The steps of a device-side loop (choose_by_reservations), run to its
+    // end without the host: first(i, step, current) for every i below
+    // sizes[current], then second(i, step, current), then current = 1 -
+    // current, step + 1 each time, until sizes[current] is 0 (the passes
+    // keep the sizes). capacity: the most a list holds. The steps run are
+    // left in tally slot `slot`. Returns false where the device cannot run
+    // the loop as one cooperative grid (TETISO_GPU_HOST_STEPS set, for
+    // measuring, or a launch refused): the caller then steps from the host.
+    template <class First, class Second>
+    bool run_steps(i64* sizes, int current, u32 step, i64 capacity, const First& first, const Second& second, int slot,
+                   const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "run_steps", file, line);
+        static const bool host_steps = std::getenv("TETISO_GPU_HOST_STEPS") != nullptr;
+        if (host_steps) return false;
+        const auto kernel = cuda_exec::steps_kernel<First, Second>;
+        static const int per_processor = [&] {
+            int blocks = 0;
+            if (cudaOccupancyMaxActiveBlocksPerMultiprocessor(&blocks, kernel, cuda::kBlock, 0) != cudaSuccess) return 0;
+            return blocks;
+        }();
+        if (per_processor <= 0) return false;
+        // At most two blocks a multiprocessor (what fits is more): the
+        // loops of several streams of one GPU then fit beside each other.
+        const unsigned blocks = std::max(1u, std::min<unsigned>(cuda::blocks_for(std::max<i64>(capacity, 1)),
+                                                               static_cast<unsigned>(std::min(per_processor, 2)) * processors_));
+        i64* steps_run = tally_.data() + slot;
+        void* arguments[] = {&sizes, &current, &step, const_cast<First*>(&first), const_cast<Second*>(&second), &steps_run};
+        const cudaError_t launched = cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(kernel), dim3(blocks),
+                                                                 dim3(cuda::kBlock), arguments, 0, stream_);
+        if (launched == cudaSuccess) return true;
+        cudaGetLastError(); // a refused launch leaves no error behind
+        return false;
+    }
+
     template <class Keep>
     i32 filter(i64 n, const Keep& keep, Array<i32>& out, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
         const Timed timed(*this, "filter", file, line);
@@ -258,6 +319,26 @@ public:
         return kept;
     }
 
+    // rank() with the number kept left in tally slot `slot` rather than
+    // read: rank.size() is then n, an upper bound.
+    template <class Keep>
+    void rank_into(i64 n, const Keep& keep, Array<i32>& rank, int slot, const char* file = __builtin_FILE(),
+                   int line = __builtin_LINE()) {
+        const Timed timed(*this, "rank_into", file, line);
+        rank.resize(static_cast<std::size_t>(n) + 1);
+        counts_.resize(static_cast<std::size_t>(n) + 1);
+        i32* flag = counts_.data();
+        cuda::for_each(stream_, n + 1, [=] __device__(i64 i) { flag[i] = i < n && keep(i) ? 1 : 0; });
+        scan(flag, rank.data(), n + 1);
+        i32* r = rank.data();
+        i64* kept = tally_.data() + slot;
+        cuda::for_each(stream_, std::max<i64>(n, 1), [=] __device__(i64 i) {
+            if (i == 0) *kept = r[n];
+            if (i < n && !flag[i]) r[i] = -1;
+        });
+        rank.resize(static_cast<std::size_t>(n));
+    }
+
     template <class Counted>
     i64 count(i64 n, const Counted& counted, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
         const Timed timed(*this, "count", file, line);
@@ -287,11 +368,24 @@ public:
         cuda::for_each(stream_, 1, [=] __device__(i64) { o[n] = n > 0 ? o[n - 1] + c[n - 1] : 0; });
     }
 
+    // offsets_of, the sum left in tally slot `slot`.
+    void offsets_into(const Array<i32>& counts, i64 n, Array<i32>& offsets, int slot) {
+        offsets.resize(static_cast<std::size_t>(n) + 1);
+        if (n > 0) scan(counts.data(), offsets.data(), n);
+        const i32* c = counts.data();
+        i32* o = offsets.data();
+        i64* sum = tally_.data() + slot;
+        cuda::for_each(stream_, 1, [=] __device__(i64) {
+            o[n] = n > 0 ? o[n - 1] + c[n - 1] : 0;
+            *sum = o[n];
+        });
+    }
+
     // The counts a driver needs only later: count_into and filter_into leave
     // theirs in a slot of the tally, on the device, for a loop of the device
     // to read (tally_at, with for_each_of) or for the host to read with the
     // others in one wait (read_tally).
-    static constexpr int kTallySlots = 8;
+    static constexpr int kTallySlots = 16;
     template <class Counted>
     void count_into(i64 n, const Counted& counted, int slot, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
         const Timed timed(*this, "count_into", file, line);
@@ -573,7 +667,7 @@ private:
     }
 
     cudaStream_t stream_;
-    unsigned resident_blocks_ = 1, test_blocks_ = 1;
+    unsigned processors_ = 1, resident_blocks_ = 1, test_blocks_ = 1;
     std::vector<cudaEvent_t> marks_;
     std::size_t next_mark_ = 0;
     mutable cuda_exec::Profile profile_;

@@ -123,7 +123,16 @@ struct HostExec {
     // Counts a driver needs only later (CudaExec keeps them on the device):
     // count_into and filter_into leave theirs in a slot of the tally, which
     // tally_at points to and read_tally returns whole.
-    static constexpr int kTallySlots = 8;
+    static constexpr int kTallySlots = 16;
+    // rank() and exclusive_scan() with the number kept or the sum in a slot
+    // of the tally (rank.size() is then n, as on the device).
+    template <class Keep>
+    void rank_into(i64 n, const Keep& keep, Array<i32>& rank, int slot) {
+        tally_[static_cast<std::size_t>(slot)] = this->rank(n, keep, rank);
+    }
+    void offsets_into(const Array<i32>& counts, i64 n, Array<i32>& offsets, int slot) {
+        tally_[static_cast<std::size_t>(slot)] = exclusive_scan(counts, n, offsets);
+    }
     template <class Counted>
     void count_into(i64 n, const Counted& counted, int slot) {
         tally_[static_cast<std::size_t>(slot)] = count(n, counted);

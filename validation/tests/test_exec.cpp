@@ -162,17 +162,26 @@ void check_selection(Exec& exec, i64 n, u32 percent, u64 seed) {
 
     EXPECT_EQ(exec.count(n, keep), kept);
 
-    // The tally's slots are independent: two counts and a filter, read at once.
+    // The tally's slots are independent: two counts, a filter and a rank,
+    // read at once.
     const auto drop = [=] TETISO_HD(i64 i) { return !(v[i] < percent); };
     ArrayOf<Exec, i32> into;
     exec.count_into(n, keep, 0);
     exec.count_into(n, drop, Exec::kTallySlots - 1);
     exec.filter_into(n, keep, into, 3);
+    ArrayOf<Exec, i32> rank_kept_later;
+    exec.rank_into(n, drop, rank_kept_later, 4);
     const auto tally = exec.read_tally();
     EXPECT_EQ(tally[0], kept);
     EXPECT_EQ(tally[Exec::kTallySlots - 1], n - kept);
     EXPECT_EQ(tally[3], kept);
+    EXPECT_EQ(tally[4], n - kept);
     EXPECT_EQ(downloaded(exec, into, kept), kept_indices);
+    std::vector<i32> drop_ranks(static_cast<std::size_t>(n), -1);
+    for (i64 i = 0, r = 0; i < n; ++i)
+        if (ranks[static_cast<std::size_t>(i)] < 0) drop_ranks[static_cast<std::size_t>(i)] = static_cast<i32>(r++);
+    EXPECT_EQ(rank_kept_later.size(), static_cast<std::size_t>(n));
+    EXPECT_EQ(downloaded(exec, rank_kept_later, n), drop_ranks);
 
     // A loop sized by a tally slot, without the host reading it.
     ArrayOf<Exec, i64> marked;
@@ -203,6 +212,10 @@ void check_sums(Exec& exec, i64 n, u64 seed) {
     exec.upload(counts, device_counts);
     EXPECT_EQ(exec.exclusive_scan(device_counts, n, device_offsets), offsets.back());
     EXPECT_EQ(downloaded(exec, device_offsets, n + 1), offsets);
+    ArrayOf<Exec, i32> offsets_left;
+    exec.offsets_into(device_counts, n, offsets_left, 2);
+    EXPECT_EQ(exec.read_tally()[2], offsets.back());
+    EXPECT_EQ(downloaded(exec, offsets_left, n + 1), offsets);
 
     ArrayOf<Exec, u32> values, sums;
     exec.upload(host, values);
@@ -330,6 +343,44 @@ void check_order_by_key(Exec& exec, i64 n, u64 below, u64 seed) {
 
 #ifdef TETISO_TEST_GPU
 
+// CudaExec::run_steps: a loop of steps on the device alone. List `current`
+// holds values; a step's second pass counts a visit to each and carries on
+// those whose low `step` bits are all 1 (a set, whatever order the passes
+// append in), the first pass emptying the other list. A value v with t
+// trailing ones is visited in steps 1 .. t + 1; the loop ends after the
+// step that carries nothing on.
+template <class Exec>
+void check_run_steps(Exec& exec, i64 n) {
+    std::vector<i64> values(static_cast<std::size_t>(n));
+    std::iota(values.begin(), values.end(), i64{0});
+    ArrayOf<Exec, i64> list0, list1, sizes, visits;
+    exec.upload(values, list0);
+    exec.assign(list1, std::max<i64>(n, 1), i64{-1});
+    exec.upload(std::vector<i64>{n, 7}, sizes);
+    exec.assign(visits, n, i64{0});
+    i64 *l0 = list0.data(), *l1 = list1.data(), *size = sizes.data(), *visited = visits.data();
+    const auto first = [=] TETISO_HD(i64 i, u32, int current) {
+        if (i == 0) size[1 - current] = 0;
+    };
+    const auto second = [=] TETISO_HD(i64 i, u32 step, int current) {
+        const i64 value = (current == 0 ? l0 : l1)[i];
+        hd::atomic_add(visited + value, i64{1});
+        const i64 mask = (i64{1} << step) - 1;
+        if ((value & mask) == mask) (current == 0 ? l1 : l0)[hd::atomic_add(size + 1 - current, i64{1})] = value;
+    };
+    ASSERT_TRUE(exec.run_steps(size, 0, 0, n, first, second, 6));
+    std::vector<i64> expected(static_cast<std::size_t>(n));
+    i64 steps = 0;
+    for (i64 v = 0; v < n; ++v) {
+        i64 ones = 0;
+        while ((v >> ones) & 1) ++ones;
+        expected[static_cast<std::size_t>(v)] = ones + 1;
+        steps = std::max(steps, ones + 1);
+    }
+    EXPECT_EQ(exec.read_tally()[6], steps);
+    EXPECT_EQ(downloaded(exec, visits, n), expected);
+}
+
 struct OnCuda {
     using Exec = CudaExec;
     static constexpr bool kHost = false;
@@ -442,6 +493,12 @@ TYPED_TEST(ExecConformance, OrderByKeyIsStable) {
     // One key for all, many ties, few ties.
     for (const u64 below : {u64{1}, u64{7}, u64{0}}) at_every_size([&](i64 n) { check_order_by_key(this->exec(), n, below, seed++); });
 }
+
+#ifdef TETISO_TEST_GPU
+TYPED_TEST(ExecConformance, RunStepsToTheEndOnTheDevice) {
+    at_every_size([&](i64 n) { check_run_steps(this->exec(), n); });
+}
+#endif
 
 // The members whose values are each backend's own (the steps, the window,
 // the times) promise only what a driver relies on.

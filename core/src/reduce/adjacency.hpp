@@ -215,7 +215,7 @@ inline std::string key_text(EdgeKey key) { return std::to_string(key); }
 // naming the first faulty edge or vertex); later rounds only order (the
 // operations keep the surface manifold; a fault there is an internal error).
 template <class Exec>
-void build_fans(Exec& exec, Surface<Exec>& s, bool validate, Fans<Exec>& fans) {
+void order_all_fans(Exec& exec, Surface<Exec>& s, bool validate, Fans<Exec>& fans) {
     const i32 nv = s.nv, nt = s.nt;
     const i32* tri = s.tri.data();
     exec.group_by_key(3 * static_cast<i64>(nt), nv, [=] TETISO_HD(i64 c) { return tri[c]; }, fans.off, fans.corner,
@@ -233,9 +233,20 @@ void build_fans(Exec& exec, Surface<Exec>& s, bool validate, Fans<Exec>& fans) {
     const FanFinding finding{fans.problem.data(), validate ? fans.problem_other.data() : nullptr,
                              validate ? fans.problem_count.data() : nullptr};
     order_fans(exec, tri, nv, validate, nullptr, false, fans, finding);
+}
+
+// After order_all_fans found `problems` vertices it could not order (a fan
+// too large for the stack is a problem too): orders the large fans, and
+// throws for what is still wrong.
+template <class Exec>
+void finish_fans(Exec& exec, Surface<Exec>& s, bool validate, i64 problems, Fans<Exec>& fans) {
+    if (problems == 0) return;
+    const i32 nv = s.nv;
+    const i32* tri = s.tri.data();
+    const std::size_t corners = 3 * static_cast<std::size_t>(s.nt);
+    const FanFinding finding{fans.problem.data(), validate ? fans.problem_other.data() : nullptr,
+                             validate ? fans.problem_count.data() : nullptr};
     const u8* problem = fans.problem.data();
-    // Every round asks once (a fan too large for the stack is a problem too).
-    if (exec.count(nv, [=] TETISO_HD(i64 v) { return problem[v] != kFanOk; }) == 0) return;
     if (exec.count(nv, [=] TETISO_HD(i64 v) { return problem[v] == kFanTooLarge; }) > 0) {
         fans.large_scratch.resize(6 * corners);
         order_fans(exec, tri, nv, validate, fans.large_scratch.data(), true, fans, finding);
@@ -262,6 +273,13 @@ void build_fans(Exec& exec, Surface<Exec>& s, bool validate, Fans<Exec>& fans) {
         m << edge() << " is run in the same direction by both of its triangles (inconsistent orientation)";
     else m << "vertex (key " << key_text(exec.get(s.key, v)) << ") is non-manifold: its triangles form more than one fan";
     throw Error(m.str());
+}
+
+// The fans' problems, into tally slot `slot` (read with the edges' count).
+template <class Exec>
+void count_fan_problems(Exec& exec, i32 nv, const Fans<Exec>& fans, int slot) {
+    const u8* problem = fans.problem.data();
+    exec.count_into(nv, [=] TETISO_HD(i64 v) { return problem[v] != kFanOk; }, slot);
 }
 
 // ---------------------------------------------------------------------------
@@ -317,17 +335,27 @@ struct Edges {
     EdgesView view() const { return {v0.data(), v1.data(), s0.data(), first.data(), n}; }
 };
 
+// The edges each vertex owns and their offsets, the total left in tally
+// slot `slot`; a vertex whose fan could not be ordered (problem) counts
+// none: its fan is not read, and the edges are counted again once it is.
 template <class Exec>
-void build_edges(Exec& exec, const FansView& fans, i32 nv, Edges<Exec>& edges) {
+void count_edges(Exec& exec, const FansView& fans, const u8* problem, i32 nv, Edges<Exec>& edges, int slot) {
     edges.count.resize(static_cast<std::size_t>(nv));
     i32* count = edges.count.data();
     exec.for_each(nv, [=] TETISO_HD(i64 vi) {
         const i32 v = static_cast<i32>(vi);
         i32 c = 0;
-        for (i32 j = 0, n = fans.nn(v); j < n; ++j) c += fans.nbr(v, j) > v;
+        if (problem[v] == kFanOk)
+            for (i32 j = 0, n = fans.nn(v); j < n; ++j) c += fans.nbr(v, j) > v;
         count[v] = c;
     });
-    edges.n = exec.exclusive_scan(edges.count, nv, edges.first);
+    exec.offsets_into(edges.count, nv, edges.first, slot);
+}
+
+// The edges' records, once count_edges' total (n) is known.
+template <class Exec>
+void write_edges(Exec& exec, const FansView& fans, i32 nv, i32 n, Edges<Exec>& edges) {
+    edges.n = n;
     const auto ne = static_cast<std::size_t>(edges.n);
     edges.v0.resize(ne);
     edges.v1.resize(ne);

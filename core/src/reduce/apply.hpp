@@ -126,21 +126,24 @@ struct Compaction {
 // per-vertex arrays that follow the vertices (changed, refused_slots);
 // triangle_refs: n triangle indices to renumber (the samples' owners);
 // vertex_tags, where given: a per-vertex array that follows the vertices too
-// (a batch's piece of each vertex).
+// (a batch's piece of each vertex). The numbers kept are left in tally
+// slots vertex_slot and triangle_slot, for the host to read with the
+// round's other counts (sized_as_compacted then sets them): the arrays are
+// written sized for everything kept.
 template <class Exec>
 void compact(Exec& exec, Surface<Exec>& s, Compaction<Exec>& c, typename Exec::template Array<u8>& vertex_marks,
              typename Exec::template Array<u32>& vertex_masks, i32* triangle_refs, i32 refs,
-             typename Exec::template Array<i32>* vertex_tags = nullptr) {
+             typename Exec::template Array<i32>* vertex_tags, int vertex_slot, int triangle_slot) {
     const i32 nv = s.nv, nt = s.nt;
     const u8* vertex_alive = c.vertex_alive.data();
-    const i32 next = exec.rank(nv, [=] TETISO_HD(i64 v) { return vertex_alive[v] != 0; }, c.vertex_rank);
+    exec.rank_into(nv, [=] TETISO_HD(i64 v) { return vertex_alive[v] != 0; }, c.vertex_rank, vertex_slot);
     Surface<Exec>& to = c.spare;
-    to.xyz.resize(3 * static_cast<std::size_t>(next));
-    to.key.resize(static_cast<std::size_t>(next));
-    to.flags.resize(static_cast<std::size_t>(next));
-    c.spare_marks.resize(static_cast<std::size_t>(next));
-    c.spare_masks.resize(static_cast<std::size_t>(next));
-    c.spare_tags.resize(vertex_tags ? static_cast<std::size_t>(next) : 0);
+    to.xyz.resize(3 * static_cast<std::size_t>(nv));
+    to.key.resize(static_cast<std::size_t>(nv));
+    to.flags.resize(static_cast<std::size_t>(nv));
+    c.spare_marks.resize(static_cast<std::size_t>(nv));
+    c.spare_masks.resize(static_cast<std::size_t>(nv));
+    c.spare_tags.resize(vertex_tags ? static_cast<std::size_t>(nv) : 0);
     {
         const i32* remap = c.vertex_rank.data();
         const float* xyz = s.xyz.data();
@@ -172,11 +175,10 @@ void compact(Exec& exec, Surface<Exec>& s, Compaction<Exec>& c, typename Exec::t
     vertex_marks.swap(c.spare_marks);
     vertex_masks.swap(c.spare_masks);
     if (vertex_tags) vertex_tags->swap(c.spare_tags);
-    s.nv = next;
     const u8* triangle_alive = c.triangle_alive.data();
-    const i32 tn = exec.rank(nt, [=] TETISO_HD(i64 t) { return triangle_alive[t] != 0; }, c.triangle_rank);
-    to.tri.resize(3 * static_cast<std::size_t>(tn));
-    to.err.resize(static_cast<std::size_t>(tn));
+    exec.rank_into(nt, [=] TETISO_HD(i64 t) { return triangle_alive[t] != 0; }, c.triangle_rank, triangle_slot);
+    to.tri.resize(3 * static_cast<std::size_t>(nt));
+    to.err.resize(static_cast<std::size_t>(nt));
     {
         const i32* remap = c.vertex_rank.data();
         const i32* tpos = c.triangle_rank.data();
@@ -197,7 +199,24 @@ void compact(Exec& exec, Surface<Exec>& s, Compaction<Exec>& c, typename Exec::t
     }
     s.tri.swap(to.tri);
     s.err.swap(to.err);
-    s.nt = tn;
+}
+
+// The sizes compact() left in the tally, given to the surface and the arrays
+// that follow it.
+template <class Exec>
+void sized_as_compacted(Surface<Exec>& s, i64 vertices, i64 triangles, typename Exec::template Array<u8>& vertex_marks,
+                        typename Exec::template Array<u32>& vertex_masks, typename Exec::template Array<i32>* vertex_tags) {
+    const auto nv = static_cast<std::size_t>(vertices), nt = static_cast<std::size_t>(triangles);
+    s.xyz.resize(3 * nv);
+    s.key.resize(nv);
+    s.flags.resize(nv);
+    vertex_marks.resize(nv);
+    vertex_masks.resize(nv);
+    if (vertex_tags) vertex_tags->resize(nv);
+    s.tri.resize(3 * nt);
+    s.err.resize(nt);
+    s.nv = static_cast<i32>(vertices);
+    s.nt = static_cast<i32>(triangles);
 }
 
 } // namespace tetiso::reduction

@@ -189,14 +189,26 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         exec.clear_marks();
         const int round_start = exec.mark();
         last_mark = round_start;
-        build_fans(exec, s, round == 0, st.fans);
+        // The fans, and the edges counted on them before the host looks: one
+        // wait for both counts. The rare fan that needs a second pass (or
+        // the input's fault) is found then, and the edges counted again.
+        const bool validate = round == 0;
+        order_all_fans(exec, s, validate, st.fans);
+        count_fan_problems(exec, s.nv, st.fans, kTallyFanProblems);
+        count_edges(exec, st.fans.view(), st.fans.problem.data(), s.nv, st.edges, kTallyEdges);
+        auto sizes = exec.read_tally();
+        if (sizes[kTallyFanProblems] > 0) {
+            finish_fans(exec, s, validate, sizes[kTallyFanProblems], st.fans);
+            count_edges(exec, st.fans.view(), st.fans.problem.data(), s.nv, st.edges, kTallyEdges);
+            sizes = exec.read_tally();
+        }
         lap(seconds.fans);
         if (round >= options.max_rounds) {
             settle_laps();
             break;
         }
         const FansView fans = st.fans.view();
-        build_edges(exec, fans, s.nv, st.edges);
+        write_edges(exec, fans, s.nv, static_cast<i32>(sizes[kTallyEdges]), st.edges);
         lap(seconds.edges);
         build_geometry(exec, s.view(), st.geometry);
         lap(seconds.geometry);
@@ -211,7 +223,8 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
             st.dry_kind.resize(edge_count);
             st.dry_survivor.resize(edge_count);
         }
-        exec.assign(st.refused, ne, u8{0});
+        st.refused.resize(edge_count);
+        st.chosen.resize(edge_count);
         if (st.samples.on) st.samples.sort(exec, st.geometry, s.nt);
         build_cones(exec, s.view(), fans, st.geometry.data(), st.cones);
         const EdgesView edges = st.edges.view();
@@ -222,15 +235,18 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         {
             const u32* refused_slots = st.refused_slots.data();
             const u8* changed = st.changed.data();
+            u8* refused = st.refused.data();
+            u8* chosen = st.chosen.data();
             exec.for_each(ne, [=] TETISO_HD(i64 ei) {
                 const i32 e = static_cast<i32>(ei);
+                refused[e] = 0;
+                chosen[e] = 0;
                 // A finished piece of a batch is frozen: its edges offer nothing.
                 if (piece_done[vertex_piece ? vertex_piece[edges.v0[e]] : 0]) ops.kind[e] = kQuiet;
                 else if (known_refused(refused_slots, edges, e) && unchanged(fans, edges, changed, e)) ops.kind[e] = kQuiet;
                 else classify(m, e, ops);
             });
         }
-        exec.assign(st.chosen, ne, u8{0});
         const u8* kind = st.kind.data();
         const i32 candidates = exec.filter(ne, [=] TETISO_HD(i64 e) {
             return kind[e] == kPending || kind[e] == kCollapse;
@@ -250,6 +266,7 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         exec.assign(sel.claimed, s.nv, i32{0});
         sel.stamp = 0;
         sel.steps = 0;
+        sel.device_steps = 0;
         const SelectView select_view{fans, edges, st.cones.data(), sel.claimed.data(), 0};
         i32* owner = st.samples.on ? st.samples.owner.data() : nullptr;
         choose<false>(exec, sel, select_view, st.candidates, candidates, s.nv, st.priority.data(), chosen, refused,
@@ -267,27 +284,39 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         });
         SelectView clear_view = select_view;
         clear_view.stamp = sel.stamp;
-        const i32 offered = exec.filter(ne, [=] TETISO_HD(i64 ei) {
+        // The edges offered a flip stay counted on the device: the flips
+        // among them are picked from a list read up to that count, and only
+        // their number is read.
+        exec.filter_into(ne, [=] TETISO_HD(i64 ei) {
             const i32 e = static_cast<i32>(ei);
             return kind[e] == kNone && !refused[e] && clear_view.free(edges.v0[e]) && clear_view.free(edges.v1[e]);
-        }, st.offered);
-        {
-            const i32* list = st.offered.data();
-            exec.for_each(offered, [=] TETISO_HD(i64 k) {
-                const i32 e = list[k];
-                if (!propose_flip(m, e, ops)) refused[e] = 1;
-            });
-        }
-        std::size_t evaluated = static_cast<std::size_t>(offered);
+        }, st.offered, kTallyOffered);
+        const i64* offered = exec.tally_at(kTallyOffered);
         const i32* offered_list = st.offered.data();
-        const i32 flips = exec.copy_if(st.offered, offered, [=] TETISO_HD(i64 k) {
-            return kind[offered_list[k]] == kFlip;
+        exec.for_each_of(offered, ne, [=] TETISO_HD(i64 k) {
+            const i32 e = offered_list[k];
+            if (!propose_flip(m, e, ops)) refused[e] = 1;
+        });
+        // The host's list is as long as its count; the device's has room
+        // for every edge.
+        i64 offered_most = ne;
+        if constexpr (Exec::kHost) offered_most = *offered;
+        const i32 flips = exec.copy_if(st.offered, offered_most, [=] TETISO_HD(i64 k) {
+            return k < *offered && kind[offered_list[k]] == kFlip;
         }, st.flips);
         choose<true>(exec, sel, clear_view, st.flips, flips, s.nv, st.priority.data(), chosen, refused, FlipTest{});
+        // The vertices' answers, and their marks for apply (the round's
+        // last reader of the old ones was the classification).
+        Compaction<Exec>& c = st.compaction;
+        c.vertex_alive.resize(static_cast<std::size_t>(s.nv));
         {
             u32* refused_slots = st.refused_slots.data();
+            u8* vertex_alive = c.vertex_alive.data();
+            u8* changed = st.changed.data();
             exec.for_each(s.nv, [=] TETISO_HD(i64 v) {
                 refused_slots[v] = refused_mask(edges, kind, refused, static_cast<i32>(v));
+                vertex_alive[v] = 1;
+                changed[v] = 0;
             });
         }
         {
@@ -295,7 +324,6 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
             exec.count_into(candidates, [=] TETISO_HD(i64 k) { return kind[list[k]] != kPending; }, kTallyEvaluated);
         }
         stats.candidates = static_cast<std::size_t>(candidates) + static_cast<std::size_t>(flips);
-        stats.selection_steps = sel.steps;
         lap(seconds.select);
 
         // Samples still to move: those of the flips (a collapse's test moved
@@ -321,10 +349,7 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
             exec.for_each_of(exec.tally_at(kTallyFlips), ne, [=] TETISO_HD(i64 k) { move_flip_samples(m, list[k], owner); },
                              Exec::Grain::kTests);
         }
-        Compaction<Exec>& c = st.compaction;
-        exec.assign(c.vertex_alive, s.nv, u8{1});
         exec.assign(c.triangle_alive, s.nt, u8{1});
-        exec.assign(st.changed, s.nv, u8{0});
         const ApplyView applied{c.vertex_alive.data(), c.triangle_alive.data(), st.changed.data()};
         const SurfaceView surface = s.view();
         exec.for_each(ne, [=] TETISO_HD(i64 e) {
@@ -352,16 +377,22 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
             });
             exec.count_into(pieces, [=] TETISO_HD(i64 p) { return piece_done[p] == 0; }, kTallyActive);
         }
+        lap(seconds.apply);
+        // Compaction before the host reads the round's counts: one wait for
+        // the statistics, the stopping rule and the new sizes. (A round
+        // without a collapse compacts nothing away: its copies are the same.)
+        compact(exec, s, c, st.changed, st.refused_slots, owner, st.samples.on ? st.samples.count : 0,
+                pieces > 1 ? &st.vertex_piece : nullptr, kTallyVertices, kTallyTriangles);
         const auto tally = exec.read_tally(); // the round's one wait for its statistics
-        stats.evaluated = evaluated + static_cast<std::size_t>(tally[kTallyEvaluated]);
+        sized_as_compacted(s, tally[kTallyVertices], tally[kTallyTriangles], st.changed, st.refused_slots,
+                           pieces > 1 ? &st.vertex_piece : nullptr);
+        stats.evaluated = static_cast<std::size_t>(tally[kTallyOffered]) + static_cast<std::size_t>(tally[kTallyEvaluated]);
         stats.collapses = static_cast<std::size_t>(tally[kTallyCollapses]);
         stats.flips = static_cast<std::size_t>(tally[kTallyFlips]);
         stats.changed_vertices = static_cast<std::size_t>(tally[kTallyChanged]);
-        lap(seconds.apply);
-        // Compaction leaves a piece without a collapse as it is.
-        if (stats.collapses > 0)
-            compact(exec, s, c, st.changed, st.refused_slots, owner, st.samples.on ? st.samples.count : 0,
-                    pieces > 1 ? &st.vertex_piece : nullptr);
+        stats.selection_steps = sel.steps;
+        if (sel.device_steps & 1) stats.selection_steps += static_cast<std::size_t>(tally[kTallyCollapseSteps]);
+        if (sel.device_steps & 2) stats.selection_steps += static_cast<std::size_t>(tally[kTallyFlipSteps]);
         lap(seconds.compact);
         settle_laps();
         stats.seconds = exec.seconds_between(round_start, last_mark);

@@ -106,10 +106,17 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
     const i32* entrant_rank = nullptr;
     u8* outcome = nullptr;
     i32* claim_rank = nullptr;
+    // On the device, with a window of every entrant, their number is never
+    // needed on the host: they enter, and the steps run, up to the count the
+    // device keeps (entrants is then n, the most there can be).
+    bool entrants_on_device = false;
     if (speculate) {
         if constexpr (!Flips) dry_run_all(exec, sel, n, test);
         outcome = sel.outcome.data();
-        entrants = exec.filter(n, [=] TETISO_HD(i64 k) { return outcome[k] == kOutcomeUndecided; }, sel.entrants);
+        const auto legal = [=] TETISO_HD(i64 k) { return outcome[k] == kOutcomeUndecided; };
+        if constexpr (!Exec::kHost) entrants_on_device = sel.window_override == 0;
+        if (entrants_on_device) exec.filter_into(n, legal, sel.entrants, kTallyEntrants);
+        else entrants = exec.filter(n, legal, sel.entrants);
         entrant_rank = sel.entrants.data();
         exec.assign(sel.claim_rank, nv, kNoClaim);
         claim_rank = sel.claim_rank.data();
@@ -130,10 +137,122 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
     i64 next = 0, held = 0; // held: the window's size, as the host last read it
     int current = 0;        // which of held[0], held[1] is the window's
     u32 step = 0;
+    WindowSlot* const list0 = sel.window.data();
+    WindowSlot* const list1 = sel.waiting.data();
+    i64* const sizes = sel.held.data();
+    u8* const state = sel.state.data();
+    // A step's two passes, over the window (list `current`, its size in
+    // sizes[current]); the waiting list is the other one. Index 0 of the
+    // first runs even in an empty window: it empties the waiting list, last
+    // read (as the window) by the previous step's passes.
+    const auto reserve = [=] TETISO_HD(i64 wi, u32 at_step, int at) {
+        WindowSlot* window = at == 0 ? list0 : list1;
+        const i64* size = sizes + at;
+        i64* waiting_size = sizes + (1 - at);
+        const u64 stamp = static_cast<u64>(~at_step) << 32;
+        if (wi == 0) *waiting_size = 0;
+        if (wi >= *size) return;
+        WindowSlot& slot = window[wi];
+        state[wi] = 0;
+        if (slot.u < 0) {
+            slot.u = v.edges.v0[slot.e];
+            slot.w = v.edges.v1[slot.e];
+        }
+        i32 vs[4];
+        if (!v.all_free(vs, v.touched<Flips>(slot.e, slot.u, slot.w, vs))) return; // blocked: decided for good
+        i32 owned[kMaxOwned];
+        slot.owned_count = v.owned<Flips>(slot.e, owned);
+        if (slot.owned_count < 0 || !v.all_free(owned, slot.owned_count)) {
+            state[wi] = kTestOnly;
+            return;
+        }
+        state[wi] = kReserved;
+        const u64 key = stamp | static_cast<u32>(slot.rank);
+        v.for_each_footprint<Flips>(slot, [&](i32 x) { hd::atomic_min(reservation + x, key); });
+    };
+    const auto decide = [=] TETISO_HD(i64 wi, u32 at_step, int at) {
+        const u8 st = state[wi];
+        if (!st) return;
+        const WindowSlot& slot = (at == 0 ? list0 : list1)[wi];
+        WindowSlot* waiting = at == 0 ? list1 : list0;
+        i64* waiting_size = sizes + (1 - at);
+        const u64 stamp = static_cast<u64>(~at_step) << 32;
+        const bool test_only = st == kTestOnly;
+        if (!test_only) {
+            // An earlier rank reserved this step is below the key; an
+            // older step's reservation is above it. Its own vertices
+            // first: a shared end is the commonest conflict.
+            const u64 key = stamp | static_cast<u32>(slot.rank);
+            bool first = true;
+            v.for_each_footprint<Flips>(slot, [&](i32 x) { first = first && reservation[x] == key; });
+            bool nearby = false; // an earlier operation nearby is undecided
+            if (first)
+                v.for_each_footprint<Flips>(slot, [&](i32 x) {
+                    for (i32 j = 0, m = v.fans.nn(x); j < m && !nearby; ++j)
+                        nearby = reservation[v.fans.nbr(x, j)] < key;
+                });
+            if (!first || nearby) {
+                waiting[hd::atomic_add(waiting_size, i64{1})] = slot;
+                return;
+            }
+        }
+        if (speculate) { // tested after the steps
+            if (test_only) {
+                outcome[slot.rank] = kOutcomeBlockedByCorner;
+                return;
+            }
+            outcome[slot.rank] = kOutcomeChosen;
+            chosen[slot.e] = kChosen;
+            v.claim_around<Flips>(slot.e, claim_rank, slot.rank);
+            return;
+        }
+        // The device always speculates for collapses: the test is not
+        // compiled into its steps, whose every thread would otherwise
+        // reserve the test's registers and stack. (The casts capture
+        // what only that branch uses: CUDA's extended lambdas may not
+        // capture inside an if constexpr.)
+        (void)test;
+        (void)refused;
+        if constexpr (Exec::kHost || Flips) {
+        // A decided operation's owned corners were clear when it
+        // reserved them, and only an earlier operation, all decided
+        // now, could have claimed them; a test-only one's were
+        // claimed. One call of the test either way (on the GPU each
+        // inlined copy of it costs every thread its stack frame).
+        const Verdict verdict = test(slot.e, [=](const i32*, int) { return !test_only; });
+        if (test_only) {
+            if (verdict == Verdict::kIllegal) refused[slot.e] = 1;
+            return;
+        }
+        if (verdict != Verdict::kLegal) {
+            refused[slot.e] = 1;
+            return;
+        }
+        chosen[slot.e] = kChosen;
+        v.claim_around<Flips>(slot.e, nullptr, 0);
+        }
+    };
+    if constexpr (!Exec::kHost) {
+        if (entrants_on_device) {
+            const i64* count = exec.tally_at(kTallyEntrants);
+            exec.for_each_of(count, n, [=] TETISO_HD(i64 k) {
+                if (k == 0) sizes[0] = *count;
+                if (k >= *count) return;
+                const i32 rank = entrant_rank[k];
+                list0[k] = {rank, order[rank], -1, -1, -1};
+            }, Grain::kCheap, 1);
+            if (exec.run_steps(sizes, 0, 0, capacity, reserve, decide, kTallyCollapseSteps)) {
+                sel.device_steps |= 1;
+                next = held = entrants = 0;
+            } else {
+                next = held = entrants = exec.read_tally()[kTallyEntrants];
+            }
+        }
+    }
     while (next < entrants || held > 0) {
         if (next < entrants && held < width) {
             const i64 entering = std::min<i64>(width - held, entrants - next);
-            WindowSlot* at = (current == 0 ? sel.window.data() : sel.waiting.data()) + held;
+            WindowSlot* at = (current == 0 ? list0 : list1) + held;
             const i32 first = static_cast<i32>(next);
             exec.for_each(entering, [=] TETISO_HD(i64 k) {
                 const i32 rank = entrant_rank ? entrant_rank[first + k] : first + static_cast<i32>(k);
@@ -143,6 +262,16 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
             held += entering;
             exec.set(sel.held, current, held);
         }
+        // Once all operations are in, the device runs the remaining steps
+        // without the host (steps that find the window empty change nothing,
+        // so ending there is ending where the host would have).
+        if constexpr (!Exec::kHost) {
+            const int slot = Flips ? kTallyFlipSteps : kTallyCollapseSteps;
+            if (next == entrants && exec.run_steps(sizes, current, step, capacity, reserve, decide, slot)) {
+                sel.device_steps |= 1 << (Flips ? 1 : 0);
+                break;
+            }
+        }
         // While operations still wait to enter, the host must know the
         // window's size after each step; once all are in, the backend may run
         // several steps before it looks.
@@ -150,94 +279,11 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
         for (int s = 0; s < steps; ++s) {
             ++sel.steps;
             ++step;
-            const u64 stamp = static_cast<u64>(~step) << 32;
-            WindowSlot* window = current == 0 ? sel.window.data() : sel.waiting.data();
-            WindowSlot* waiting = current == 0 ? sel.waiting.data() : sel.window.data();
-            i64* size = sel.held.data() + current;
-            i64* waiting_size = sel.held.data() + (1 - current);
-            u8* state = sel.state.data();
-            // Index 0 runs even in an empty window: it empties the waiting
-            // list, last read (as the window) by the previous step's loops.
-            exec.for_each_of(size, capacity, [=] TETISO_HD(i64 wi) {
-                if (wi == 0) *waiting_size = 0;
-                if (wi >= *size) return;
-                WindowSlot& slot = window[wi];
-                state[wi] = 0;
-                if (slot.u < 0) {
-                    slot.u = v.edges.v0[slot.e];
-                    slot.w = v.edges.v1[slot.e];
-                }
-                i32 vs[4];
-                if (!v.all_free(vs, v.touched<Flips>(slot.e, slot.u, slot.w, vs))) return; // blocked: decided for good
-                i32 owned[kMaxOwned];
-                slot.owned_count = v.owned<Flips>(slot.e, owned);
-                if (slot.owned_count < 0 || !v.all_free(owned, slot.owned_count)) {
-                    state[wi] = kTestOnly;
-                    return;
-                }
-                state[wi] = kReserved;
-                const u64 key = stamp | static_cast<u32>(slot.rank);
-                v.for_each_footprint<Flips>(slot, [&](i32 x) { hd::atomic_min(reservation + x, key); });
-            }, Grain::kWindow, 1);
-            exec.for_each_of(size, capacity, [=] TETISO_HD(i64 wi) {
-                const u8 st = state[wi];
-                if (!st) return;
-                const WindowSlot& slot = window[wi];
-                const bool test_only = st == kTestOnly;
-                if (!test_only) {
-                    // An earlier rank reserved this step is below the key; an
-                    // older step's reservation is above it. Its own vertices
-                    // first: a shared end is the commonest conflict.
-                    const u64 key = stamp | static_cast<u32>(slot.rank);
-                    bool first = true;
-                    v.for_each_footprint<Flips>(slot, [&](i32 x) { first = first && reservation[x] == key; });
-                    bool nearby = false; // an earlier operation nearby is undecided
-                    if (first)
-                        v.for_each_footprint<Flips>(slot, [&](i32 x) {
-                            for (i32 j = 0, m = v.fans.nn(x); j < m && !nearby; ++j)
-                                nearby = reservation[v.fans.nbr(x, j)] < key;
-                        });
-                    if (!first || nearby) {
-                        waiting[hd::atomic_add(waiting_size, i64{1})] = slot;
-                        return;
-                    }
-                }
-                if (speculate) { // tested after the steps
-                    if (test_only) {
-                        outcome[slot.rank] = kOutcomeBlockedByCorner;
-                        return;
-                    }
-                    outcome[slot.rank] = kOutcomeChosen;
-                    chosen[slot.e] = kChosen;
-                    v.claim_around<Flips>(slot.e, claim_rank, slot.rank);
-                    return;
-                }
-                // The device always speculates for collapses: the test is not
-                // compiled into its steps, whose every thread would otherwise
-                // reserve the test's registers and stack. (The casts capture
-                // what only that branch uses: CUDA's extended lambdas may not
-                // capture inside an if constexpr.)
-                (void)test;
-                (void)refused;
-                if constexpr (Exec::kHost || Flips) {
-                // A decided operation's owned corners were clear when it
-                // reserved them, and only an earlier operation, all decided
-                // now, could have claimed them; a test-only one's were
-                // claimed. One call of the test either way (on the GPU each
-                // inlined copy of it costs every thread its stack frame).
-                const Verdict verdict = test(slot.e, [=](const i32*, int) { return !test_only; });
-                if (test_only) {
-                    if (verdict == Verdict::kIllegal) refused[slot.e] = 1;
-                    return;
-                }
-                if (verdict != Verdict::kLegal) {
-                    refused[slot.e] = 1;
-                    return;
-                }
-                chosen[slot.e] = kChosen;
-                v.claim_around<Flips>(slot.e, nullptr, 0);
-                }
-            }, Grain::kTests);
+            const u32 at_step = step;
+            const int at = current;
+            const i64* size = sizes + current;
+            exec.for_each_of(size, capacity, [=] TETISO_HD(i64 wi) { reserve(wi, at_step, at); }, Grain::kWindow, 1);
+            exec.for_each_of(size, capacity, [=] TETISO_HD(i64 wi) { decide(wi, at_step, at); }, Grain::kTests);
             current = 1 - current;
         }
         held = exec.get(sel.held, current);

@@ -207,13 +207,21 @@ struct Selection {
     // (0: the backend's), and speculate as chosen.
     bool always_reservations = false;
     i64 window_override = 0;
-    std::size_t steps = 0; // reservation steps since the counter was reset
+    std::size_t steps = 0; // reservation steps since the counter was reset, run from the host
+    // Bit 0 (collapses), bit 1 (flips): the choice's steps ran on the
+    // device (Exec::run_steps), counted in kTallyCollapseSteps,
+    // kTallyFlipSteps.
+    int device_steps = 0;
 };
 
 // The counts of a round that CudaExec keeps on the device (the slots of
 // Exec::count_into, filter_into).
 // kTallyActive: the pieces of a batch not finished after the round.
 // kTallyFarSamples: the dry runs' samples too far from their own face.
+// kTallyFanProblems, kTallyEdges: the fans not ordered, the edges (read
+// together, before the edges are written). kTallyOffered: the edges offered
+// a flip. kTallyVertices, kTallyTriangles: the surface's after compaction.
+// kTallyEntrants: the collapses found legal by the dry runs.
 enum TallySlot : int {
     kTallyEvaluated,
     kTallyCollapses,
@@ -221,7 +229,15 @@ enum TallySlot : int {
     kTallyChanged,
     kTallyDrySurvivors,
     kTallyActive,
-    kTallyFarSamples
+    kTallyFarSamples,
+    kTallyFanProblems,
+    kTallyEdges,
+    kTallyOffered,
+    kTallyCollapseSteps,
+    kTallyFlipSteps,
+    kTallyVertices,
+    kTallyTriangles,
+    kTallyEntrants
 };
 
 } // namespace tetiso::reduction
