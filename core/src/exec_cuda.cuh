@@ -252,10 +252,9 @@ public:
             return blocks;
         }();
         if (per_processor <= 0) return false;
-        // At most two blocks a multiprocessor (what fits is more): the
-        // loops of several streams of one GPU then fit beside each other.
+        // Every block that fits: the grid is all the threads the loop has.
         const unsigned blocks = std::max(1u, std::min<unsigned>(cuda::blocks_for(std::max<i64>(capacity, 1)),
-                                                               static_cast<unsigned>(std::min(per_processor, 2)) * processors_));
+                                                               static_cast<unsigned>(per_processor) * processors_));
         i64* steps_run = tally_.data() + slot;
         void* arguments[] = {&sizes, &current, &step, const_cast<First*>(&first), const_cast<Second*>(&second), &steps_run};
         const cudaError_t launched = cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(kernel), dim3(blocks),
