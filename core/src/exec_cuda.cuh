@@ -231,20 +231,29 @@ public:
     // empty launches.
     static int steps_between_checks() { return 8; }
 
+    // Whether run_steps runs a loop whose lists hold up to `capacity`: where
+    // they fit the threads the device holds at once. (A surface's first
+    // rounds, with windows of hundreds of thousands, were slower with the
+    // loop on the device; its later rounds, and small pieces, faster.)
+    // TETISO_GPU_HOST_STEPS set: never, for measuring.
+    bool steps_on_device(i64 capacity) const {
+        static const bool host_steps = std::getenv("TETISO_GPU_HOST_STEPS") != nullptr;
+        return !host_steps && capacity <= static_cast<i64>(resident_blocks_) * cuda::kBlock;
+    }
+
     // The steps of a device-side loop (choose_by_reservations), run to its
     // end without the host: first(i, step, current) for every i below
     // sizes[current], then second(i, step, current), then current = 1 -
     // current, step + 1 each time, until sizes[current] is 0 (the passes
     // keep the sizes). capacity: the most a list holds. The steps run are
-    // left in tally slot `slot`. Returns false where the device cannot run
-    // the loop as one cooperative grid (TETISO_GPU_HOST_STEPS set, for
-    // measuring, or a launch refused): the caller then steps from the host.
+    // left in tally slot `slot`. Returns false where the device does not
+    // run the loop as one cooperative grid (not steps_on_device(capacity),
+    // or a launch refused): the caller then steps from the host.
     template <class First, class Second>
     bool run_steps(i64* sizes, int current, u32 step, i64 capacity, const First& first, const Second& second, int slot,
                    const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
         const Timed timed(*this, "run_steps", file, line);
-        static const bool host_steps = std::getenv("TETISO_GPU_HOST_STEPS") != nullptr;
-        if (host_steps) return false;
+        if (!steps_on_device(capacity)) return false;
         const auto kernel = cuda_exec::steps_kernel<First, Second>;
         static const int per_processor = [&] {
             int blocks = 0;

@@ -368,7 +368,9 @@ void check_run_steps(Exec& exec, i64 n) {
         const i64 mask = (i64{1} << step) - 1;
         if ((value & mask) == mask) (current == 0 ? l1 : l0)[hd::atomic_add(size + 1 - current, i64{1})] = value;
     };
-    ASSERT_TRUE(exec.run_steps(size, 0, 0, n, first, second, 6));
+    // A device too small for the loop declines it (the caller steps).
+    ASSERT_EQ(exec.run_steps(size, 0, 0, n, first, second, 6), exec.steps_on_device(n));
+    if (!exec.steps_on_device(n)) return;
     std::vector<i64> expected(static_cast<std::size_t>(n));
     i64 steps = 0;
     for (i64 v = 0; v < n; ++v) {

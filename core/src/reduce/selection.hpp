@@ -106,15 +106,16 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
     const i32* entrant_rank = nullptr;
     u8* outcome = nullptr;
     i32* claim_rank = nullptr;
-    // On the device, with a window of every entrant, their number is never
-    // needed on the host: they enter, and the steps run, up to the count the
-    // device keeps (entrants is then n, the most there can be).
+    // On the device, with a window of every entrant that the device steps
+    // through alone, their number is never needed on the host: they enter,
+    // and the steps run, up to the count the device keeps (entrants is then
+    // n, the most there can be).
     bool entrants_on_device = false;
     if (speculate) {
         if constexpr (!Flips) dry_run_all(exec, sel, n, test);
         outcome = sel.outcome.data();
         const auto legal = [=] TETISO_HD(i64 k) { return outcome[k] == kOutcomeUndecided; };
-        if constexpr (!Exec::kHost) entrants_on_device = sel.window_override == 0;
+        if constexpr (!Exec::kHost) entrants_on_device = sel.window_override == 0 && exec.steps_on_device(n);
         if (entrants_on_device) exec.filter_into(n, legal, sel.entrants, kTallyEntrants);
         else entrants = exec.filter(n, legal, sel.entrants);
         entrant_rank = sel.entrants.data();
