@@ -6,6 +6,7 @@
 #include <array>
 #include <bit>
 #include <chrono>
+#include <limits>
 #include <numeric>
 #include <string>
 
@@ -390,6 +391,38 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
     ReduceReport reduce_report;
     ReduceOptions reduce_options = options.reduce_options;
     reduce_options.keep_samples = true;
+    // The reduction keeps its new faces within the box of the region's
+    // vertices (each new vertex lies on an edge it collapses): the faces of
+    // the rest of the piece that reach into that box are its obstacles.
+    if (!members.empty()) {
+        std::array<float, 3> lo{sub.x[0], sub.y[0], sub.z[0]}, hi = lo;
+        for (std::size_t i = 0; i < sub.vertex_count(); ++i) {
+            const std::array<float, 3> p{sub.x[i], sub.y[i], sub.z[i]};
+            for (int c = 0; c < 3; ++c) {
+                lo[c] = std::min(lo[c], p[c]);
+                hi[c] = std::max(hi[c], p[c]);
+            }
+        }
+        for (std::size_t t = 0; t < piece.triangle_count(); ++t) {
+            if (in_region[t]) continue;
+            bool apart = false;
+            for (int c = 0; c < 3 && !apart; ++c) {
+                float low = std::numeric_limits<float>::max(), high = -low;
+                for (int k = 0; k < 3; ++k) {
+                    const auto v = static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>(k)]);
+                    const float q = c == 0 ? piece.x[v] : c == 1 ? piece.y[v] : piece.z[v];
+                    low = std::min(low, q);
+                    high = std::max(high, q);
+                }
+                apart = low > hi[c] || high < lo[c];
+            }
+            if (apart) continue;
+            for (int k = 0; k < 3; ++k) {
+                const auto v = static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>(k)]);
+                reduce_options.obstacles.insert(reduce_options.obstacles.end(), {piece.x[v], piece.y[v], piece.z[v]});
+            }
+        }
+    }
     const Piece reduced = options.reducer ? options.reducer(sub, reduce_options, &reduce_report)
                                           : reduce(sub, reduce_options, &reduce_report);
     const double reduce_seconds = lap(clock);

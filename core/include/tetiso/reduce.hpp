@@ -88,6 +88,12 @@ struct ReduceOptions {
     // minimum angle of the two faces by more than 20 %.
     bool flips = true;
     double flip_max_dihedral_degrees = 10.0;
+    // Triangles beside the piece, not part of it (nine coordinates each, x,
+    // y, z of three corners): no new triangle may meet one, other than at a
+    // corner it shares with it by position. A seam reducing a region of a
+    // surface passes the rest of the surface around the region, so that the
+    // region cannot be pushed through it.
+    std::vector<float> obstacles;
 };
 
 struct ReduceRound {

@@ -28,6 +28,7 @@
 #pragma once
 
 #include <algorithm>
+#include <limits>
 #include <utility>
 
 #include "../hd.hpp"
@@ -325,6 +326,71 @@ TETISO_HD inline bool clear_of_neighbours(const RoundView& m, i32 u, i32 w, bool
 }
 
 // ---------------------------------------------------------------------------
+// Contact between faces that share no corner (contact.hpp): every face of
+// the round's start near the new ones, other than those the operation
+// replaces and those around the new faces' own corners (the tests above),
+// must stay clear of them.
+
+TETISO_HD inline bool same(Vec a, Vec b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
+// New face k of an operation: its corners' vertices (-1 for a collapse's new
+// vertex) and positions.
+struct FaceCorners {
+    i32 id[3];
+    Vec at[3];
+};
+
+// faces: the number of new faces; face_at(k): new face k; replaced(x, y,
+// z): whether the face with these corners is one the operation removes or
+// rewrites. box: holds every new face.
+template <class FaceAt, class Replaced>
+TETISO_HD bool clear_of_distant(const RoundView& m, const Box& box, int faces, const FaceAt& face_at,
+                                const Replaced& replaced) {
+    if (!m.contact.on) return true;
+    const double reach = std::max({std::abs(box.lo.x), std::abs(box.lo.y), std::abs(box.lo.z), std::abs(box.hi.x),
+                                   std::abs(box.hi.y), std::abs(box.hi.z)});
+    const double margin = kContactUlps * std::numeric_limits<float>::epsilon() * reach;
+    const ContactGridView& g = m.contact;
+    return for_each_triangle_near(g, box, margin, [&](i32 t) {
+        // An obstacle's corners are no vertices of the piece: shared, they
+        // are shared by position (a locked rim vertex keeps it bit for bit).
+        const bool surface = t < g.nt;
+        const i32 x = surface ? m.s.tri[3 * t] : -2, y = surface ? m.s.tri[3 * t + 1] : -2,
+                  z = surface ? m.s.tri[3 * t + 2] : -2;
+        if (surface && replaced(x, y, z)) return true;
+        const Vec px = g.corner(m.s, t, 0), py = g.corner(m.s, t, 1), pz = g.corner(m.s, t, 2);
+        const Box tb = box_of(px, py, pz);
+        if (tb.apart(box, margin)) return true;
+        for (int k = 0; k < faces; ++k) {
+            const FaceCorners f = face_at(k);
+            bool shared = false;
+            for (int c = 0; c < 3; ++c) {
+                const i32 id = f.id[c];
+                const Vec a = f.at[c];
+                shared = shared || (surface ? id == x || id == y || id == z : same(a, px) || same(a, py) || same(a, pz));
+            }
+            if (shared || box_of(f.at[0], f.at[1], f.at[2]).apart(tb, margin)) continue;
+            if (triangles_meet(f.at[0], f.at[1], f.at[2], px, py, pz)) return false;
+        }
+        return true;
+    });
+}
+
+// A collapse's new faces against the faces near them; the faces around u and
+// w are the ones it replaces.
+TETISO_HD inline bool collapse_clear_of_distant(const RoundView& m, i32 u, i32 w, const NewFan& fan) {
+    Box box{fan.p, fan.p};
+    for (int f = 0; f < fan.count; ++f) {
+        box.add(fan.a(f));
+        box.add(fan.b(f));
+    }
+    return clear_of_distant(
+        m, box, fan.count,
+        [&](int f) { return FaceCorners{{-1, fan.ia[f], fan.ib[f]}, {fan.p, fan.a(f), fan.b(f)}}; },
+        [&](i32 x, i32 y, i32 z) { return x == u || x == w || y == u || y == w || z == u || z == w; });
+}
+
+// ---------------------------------------------------------------------------
 // Collapses.
 
 // Where a legal collapse's samples go: kept until the collapse knows it
@@ -473,7 +539,9 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
     if (spoiled || faces > NewFan::kMax) return false;
     fan.count = faces;
     if (!m.samples.on) {
-        if (!clear_of_neighbours(m, u, w, border_edge, fan) || !owns(border_edge)) return false;
+        if (!clear_of_neighbours(m, u, w, border_edge, fan) || !collapse_clear_of_distant(m, u, w, fan) ||
+            !owns(border_edge))
+            return false;
         ops.err[i] = static_cast<float>(err_old + increment);
         return true;
     }
@@ -482,7 +550,9 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
     double worst = border_edge ? err_old + increment : 0.0;
     if (worst > m.p.max_error) return false;
     if (deferred) {
-        if (!clear_of_neighbours(m, u, w, border_edge, fan) || !owns(border_edge)) return false;
+        if (!clear_of_neighbours(m, u, w, border_edge, fan) || !collapse_clear_of_distant(m, u, w, fan) ||
+            !owns(border_edge))
+            return false;
         *deferred = worst;
         return true;
     }
@@ -490,7 +560,9 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
     // fails half way must leave the owners as they were.
     Placements placed;
     if (!place_samples(m, r, fan, worst, [&](i32 sample, i32 t) { placed.add(sample, t); })) return false;
-    if (!clear_of_neighbours(m, u, w, border_edge, fan) || !owns(border_edge)) return false;
+    if (!clear_of_neighbours(m, u, w, border_edge, fan) || !collapse_clear_of_distant(m, u, w, fan) ||
+        !owns(border_edge))
+        return false;
     if (owner) {
         if (!placed.overflow) {
             for (int k = 0; k < placed.count; ++k) owner[placed.sample[k]] = placed.triangle[k];
@@ -562,6 +634,14 @@ TETISO_HD inline bool propose_flip(const RoundView& m, i32 e, const OpsView& ops
     // not settle it the flip, an improvement only, is not made.
     if (!inside_cone(m, u, n1) || !inside_cone(m, c, n1) || !inside_cone(m, d, n1) || !inside_cone(m, w, n2) ||
         !inside_cone(m, c, n2) || !inside_cone(m, d, n2))
+        return false;
+    // Nor through a face it shares no corner with.
+    Box box{pu, pu};
+    for (const Vec q : {pw, pc, pd}) box.add(q);
+    const FaceCorners made[2] = {{{c, u, d}, {pc, pu, pd}}, {{d, w, c}, {pd, pw, pc}}};
+    if (!clear_of_distant(m, box, 2, [&](int k) { return made[k]; }, [&](i32 x, i32 y, i32 z) {
+            return (x == u || y == u || z == u) && (x == w || y == w || z == w);
+        }))
         return false;
     // Error: the gap between the two diagonals.
     const Vec axis = cross(pw - pu, pd - pc);

@@ -56,6 +56,7 @@ struct ReductionState {
     Edges<Exec> edges;
     Array<FaceGeometry> geometry;
     Array<Cone> cones;
+    ContactGrid<Exec> contact;
     Array<u8> kind;
     Array<u32> priority;
     Array<float> px, py, pz, err;
@@ -143,6 +144,7 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
     Surface<Exec>& s = st.s;
     exec.assign(st.changed, s.nv, u8{0});
     exec.assign(st.refused_slots, s.nv, u32{0});
+    load_obstacles(exec, options.obstacles, st.contact);
     ReduceStageSeconds& seconds = rep.stages;
     // Stage times are marks (on the device, events on its stream), summed
     // once the round is over: timing a stage never waits for the device.
@@ -196,8 +198,10 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         exec.assign(st.refused, ne, u8{0});
         if (st.samples.on) st.samples.sort(exec, st.geometry, s.nt);
         build_cones(exec, s.view(), fans, st.geometry.data(), st.cones);
+        build_contact_grid(exec, s.view(), st.contact);
         const EdgesView edges = st.edges.view();
-        const RoundView m{s.view(), fans, edges, st.geometry.data(), st.cones.data(), st.samples.view(), params, round};
+        const RoundView m{s.view(),         fans,   edges, st.geometry.data(), st.cones.data(),
+                          st.samples.view(), params, round, st.contact.view()};
         const OpsView ops = st.ops();
         {
             const u32* refused_slots = st.refused_slots.data();

@@ -1,0 +1,280 @@
+// Contact with faces that share no corner (legality.hpp's clear_of_distant):
+// the round's triangles bucketed by the cells of a uniform grid, so that an
+// operation's new faces are tested against every face of the round's start
+// near them, not only against the faces around their corners. Where the
+// surface folds back close to itself (two sheets of one component a few
+// faces apart, a border running past a sheet) a collapse whose faces each
+// turn by little can still carry its fan through a face it shares nothing
+// with; the soundness soak's reduced surfaces that crossed themselves
+// (results/soundness) were all of this kind.
+//
+// The grid is rebuilt each round from the positions alone, with integer
+// counts and the Exec primitives only (exclusive_sum, group_by_key), so it is
+// the same on every backend and thread count; the tests that read it are
+// per-element functions on float positions in double precision.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include "../hd.hpp"
+#include "adjacency.hpp"
+#include "geometry.hpp"
+
+namespace tetiso::reduction {
+
+// A triangle whose bounding box covers more cells than this goes to one
+// bucket of its own that every query reads (few do: the cell is as large as
+// nine in ten of the round's triangles).
+constexpr int kMaxCellsPerTriangle = 27;
+// A query spanning more cells than this is refused (its operation waits for
+// a round whose cells are larger).
+constexpr i64 kMaxCellsPerQuery = 512;
+// Cell indices are clamped to 21 bits a side: cells beyond merge, which only
+// makes a bucket hold more.
+constexpr i64 kCellLimit = i64{1} << 20;
+// Distances below this many units in the last place of the coordinates count
+// as contact: rounding decides nothing.
+constexpr double kContactUlps = 16.0;
+
+struct ContactGridView {
+    const i32* first;      // per bucket, its first entry (groups + 2 entries)
+    const i32* order;      // entries grouped by bucket
+    const i32* entry_tri;  // per entry, its triangle: the surface's, then from nt on the obstacles
+    const float* obstacle; // 9 floats per obstacle (ReduceOptions::obstacles)
+    i32 nt;                // the surface's triangles
+    i32 groups;            // buckets of cells (a power of two); bucket `groups` holds the large triangles
+    double inv_cell;       // 1 / cell size (a power of two)
+    bool on;
+
+    // Corner c of grid triangle t (a surface triangle, or an obstacle).
+    TETISO_HD Vec corner(const SurfaceView& s, i32 t, int c) const {
+        if (t < nt) return s.pos(s.tri[3 * t + c]);
+        const float* q = obstacle + 9 * static_cast<std::size_t>(t - nt) + 3 * c;
+        return {q[0], q[1], q[2]};
+    }
+
+    TETISO_HD i64 cell(double x) const {
+        const double c = std::floor(x * inv_cell);
+        return c < -static_cast<double>(kCellLimit) ? -kCellLimit
+               : c > static_cast<double>(kCellLimit - 1) ? kCellLimit - 1
+                                                         : static_cast<i64>(c);
+    }
+    TETISO_HD i32 bucket(i64 ix, i64 iy, i64 iz) const {
+        const u64 packed = (static_cast<u64>(ix + kCellLimit) << 42) | (static_cast<u64>(iy + kCellLimit) << 21) |
+                           static_cast<u64>(iz + kCellLimit);
+        return static_cast<i32>(mix64(packed) & static_cast<u64>(groups - 1));
+    }
+};
+
+struct Box {
+    Vec lo, hi;
+    TETISO_HD void add(Vec p) {
+        lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+        hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+    TETISO_HD double extent() const { return std::max(hi.x - lo.x, std::max(hi.y - lo.y, hi.z - lo.z)); }
+    TETISO_HD bool apart(const Box& o, double margin) const {
+        return lo.x > o.hi.x + margin || o.lo.x > hi.x + margin || lo.y > o.hi.y + margin ||
+               o.lo.y > hi.y + margin || lo.z > o.hi.z + margin || o.lo.z > hi.z + margin;
+    }
+};
+
+TETISO_HD inline Box box_of(Vec a, Vec b, Vec c) {
+    Box box{a, a};
+    box.add(b);
+    box.add(c);
+    return box;
+}
+
+TETISO_HD inline Box triangle_box(const ContactGridView& g, const SurfaceView& s, i32 t) {
+    return box_of(g.corner(s, t, 0), g.corner(s, t, 1), g.corner(s, t, 2));
+}
+
+// The cells a box covers, per axis (inclusive ranges), and their number.
+struct CellRange {
+    i64 lo[3], hi[3];
+    TETISO_HD i64 count() const { return (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1); }
+};
+TETISO_HD inline CellRange cells_of(const ContactGridView& g, const Box& box, double margin) {
+    return {{g.cell(box.lo.x - margin), g.cell(box.lo.y - margin), g.cell(box.lo.z - margin)},
+            {g.cell(box.hi.x + margin), g.cell(box.hi.y + margin), g.cell(box.hi.z + margin)}};
+}
+
+// A triangle's histogram bin: the float exponent of its box's extent.
+TETISO_HD inline i32 extent_bin(const ContactGridView& g, const SurfaceView& s, i32 t) {
+    const float e = static_cast<float>(triangle_box(g, s, t).extent());
+    u32 b;
+    std::memcpy(&b, &e, sizeof b);
+    return static_cast<i32>((b >> 23) & 0xff);
+}
+
+TETISO_HD inline u32 entries_of(const ContactGridView& g, const SurfaceView& s, i32 t) {
+    const i64 n = cells_of(g, triangle_box(g, s, t), 0.0).count();
+    return n > kMaxCellsPerTriangle ? 1u : static_cast<u32>(n);
+}
+
+template <class Exec>
+struct ContactGrid {
+    template <class T>
+    using Array = typename Exec::template Array<T>;
+    Array<i32> histogram, entry_tri, entry_bucket, first, order, scratch;
+    Array<u32> offsets;
+    Array<float> obstacle;
+    i32 obstacles = 0;
+    ContactGridView grid{nullptr, nullptr, nullptr, nullptr, 0, 0, 0.0, false};
+
+    ContactGridView view() const { return grid; }
+};
+
+constexpr int kExtentBins = 256;
+
+// The faces beside the piece that its new faces must stay clear of, for
+// every round (ReduceOptions::obstacles).
+template <class Exec>
+void load_obstacles(Exec& exec, const std::vector<float>& obstacles, ContactGrid<Exec>& cg) {
+    cg.obstacles = static_cast<i32>(obstacles.size() / 9);
+    exec.upload(obstacles, cg.obstacle);
+}
+
+// Builds the round's grid: the cell is the power of two at or above the
+// extent of nine in ten triangles (a histogram of their float exponents:
+// integer counts), each triangle goes into the bucket of every cell its box
+// covers.
+template <class Exec>
+void build_contact_grid(Exec& exec, const SurfaceView& s, ContactGrid<Exec>& cg) {
+    cg.grid.on = false;
+    const i64 total = static_cast<i64>(s.nt) + cg.obstacles;
+    if (s.nt == 0) return;
+    ContactGridView g{nullptr, nullptr, nullptr, cg.obstacles > 0 ? cg.obstacle.data() : nullptr, s.nt, 1, 1.0, true};
+    exec.assign(cg.histogram, kExtentBins, i32{0});
+    i32* histogram = cg.histogram.data();
+    exec.for_each(total, [=] TETISO_HD(i64 t) { hd::atomic_add(histogram + extent_bin(g, s, static_cast<i32>(t)), 1); });
+    std::vector<i32> counts;
+    exec.download(cg.histogram, kExtentBins, counts);
+    i64 seen = 0;
+    int bin = 0;
+    for (; bin < kExtentBins - 1; ++bin) {
+        seen += counts[static_cast<std::size_t>(bin)];
+        if (10 * seen >= 9 * total) break;
+    }
+    // Bin b holds extents below 2^(b - 126); a cell at least that large, and
+    // no smaller than 2^-100 (a surface of zero-extent triangles).
+    const int exponent = std::max(bin - 126, -100);
+    g.inv_cell = std::ldexp(1.0, -exponent);
+    const u64 entries = exec.exclusive_sum(total, [=] TETISO_HD(i64 t) { return entries_of(g, s, static_cast<i32>(t)); },
+                                           cg.offsets);
+    i32 groups = 1;
+    while (static_cast<u64>(groups) < entries && groups < (1 << 30)) groups *= 2;
+    g.groups = groups;
+    cg.entry_tri.resize(static_cast<std::size_t>(entries));
+    cg.entry_bucket.resize(static_cast<std::size_t>(entries));
+    i32* entry_tri = cg.entry_tri.data();
+    i32* entry_bucket = cg.entry_bucket.data();
+    const u32* offsets = cg.offsets.data();
+    exec.for_each(total, [=] TETISO_HD(i64 ti) {
+        const i32 t = static_cast<i32>(ti);
+        u32 at = offsets[t];
+        const CellRange r = cells_of(g, triangle_box(g, s, t), 0.0);
+        if (r.count() > kMaxCellsPerTriangle) {
+            entry_tri[at] = t;
+            entry_bucket[at] = g.groups;
+            return;
+        }
+        for (i64 x = r.lo[0]; x <= r.hi[0]; ++x)
+            for (i64 y = r.lo[1]; y <= r.hi[1]; ++y)
+                for (i64 z = r.lo[2]; z <= r.hi[2]; ++z) {
+                    entry_tri[at] = t;
+                    entry_bucket[at++] = g.bucket(x, y, z);
+                }
+    });
+    const i32* bucket_of = entry_bucket;
+    exec.group_by_key(static_cast<i64>(entries), static_cast<i64>(groups) + 1,
+                      [=] TETISO_HD(i64 i) { return bucket_of[i]; }, cg.first, cg.order, cg.scratch);
+    g.first = cg.first.data();
+    g.order = cg.order.data();
+    g.entry_tri = entry_tri;
+    cg.grid = g;
+}
+
+// Distance between segments (p0, p1) and (q0, q1) (Ericson, Real-Time
+// Collision Detection, 5.1.9).
+TETISO_HD inline double segment_distance(Vec p0, Vec p1, Vec q0, Vec q1) {
+    const Vec d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+    const double a = norm2(d1), e = norm2(d2), f = dot(d2, r);
+    double s = 0.0, t = 0.0;
+    if (a <= 0 && e <= 0) return norm(r);
+    if (a <= 0) {
+        t = std::clamp(f / e, 0.0, 1.0);
+    } else {
+        const double c = dot(d1, r);
+        if (e <= 0) {
+            s = std::clamp(-c / a, 0.0, 1.0);
+        } else {
+            const double b = dot(d1, d2), denom = a * e - b * b;
+            s = denom > 0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+            t = (b * s + f) / e;
+            if (t < 0) {
+                t = 0;
+                s = std::clamp(-c / a, 0.0, 1.0);
+            } else if (t > 1) {
+                t = 1;
+                s = std::clamp((b - c) / a, 0.0, 1.0);
+            }
+        }
+    }
+    return norm((p0 + s * d1) - (q0 + t * d2));
+}
+
+// Whether segment (q0, q1) comes within eps of triangle (a, b, c) of unit
+// normal n: where it crosses the plane, or where it lies in it.
+TETISO_HD inline bool segment_meets(Vec a, Vec b, Vec c, Vec n, Vec q0, Vec q1, double eps) {
+    const double d0 = dot(q0 - a, n), d1 = dot(q1 - a, n);
+    if ((d0 > eps && d1 > eps) || (d0 < -eps && d1 < -eps)) return false;
+    if (std::abs(d0) <= eps && std::abs(d1) <= eps) // in the plane: the segment against the triangle's sides
+        return point_triangle_distance(q0, a, b, c) <= eps || point_triangle_distance(q1, a, b, c) <= eps ||
+               segment_distance(q0, q1, a, b) <= eps || segment_distance(q0, q1, b, c) <= eps ||
+               segment_distance(q0, q1, c, a) <= eps;
+    const double t = d0 == d1 ? 0.0 : std::clamp(d0 / (d0 - d1), 0.0, 1.0);
+    return point_triangle_distance(q0 + t * (q1 - q0), a, b, c) <= eps;
+}
+
+// Whether triangles p and q, which share no corner, meet or come within a
+// few units in the last place of their coordinates (contact that rounding
+// would decide). Degenerate ones are not judged (the other tests keep new
+// faces from being degenerate).
+TETISO_HD inline bool triangles_meet(Vec p0, Vec p1, Vec p2, Vec q0, Vec q1, Vec q2) {
+    Vec np, nq;
+    if (!(quality(p0, p1, p2, &np) > 0) || !(quality(q0, q1, q2, &nq) > 0)) return false;
+    double extent = 0.0;
+    for (const Vec v : {p0, p1, p2, q0, q1, q2})
+        extent = std::max(extent, std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z))));
+    const double eps = kContactUlps * std::numeric_limits<float>::epsilon() * extent;
+    return segment_meets(q0, q1, q2, nq, p0, p1, eps) || segment_meets(q0, q1, q2, nq, p1, p2, eps) ||
+           segment_meets(q0, q1, q2, nq, p2, p0, eps) || segment_meets(p0, p1, p2, np, q0, q1, eps) ||
+           segment_meets(p0, p1, p2, np, q1, q2, eps) || segment_meets(p0, p1, p2, np, q2, q0, eps);
+}
+
+// Calls f(t) for every triangle in the cells around box (several times for
+// some); false when the box spans too many cells to look.
+template <class F>
+TETISO_HD bool for_each_triangle_near(const ContactGridView& g, const Box& box, double margin, const F& f) {
+    const CellRange r = cells_of(g, box, margin);
+    if (r.count() > kMaxCellsPerQuery) return false;
+    const auto bucket_range = [&](i32 bucket) {
+        for (i32 k = g.first[bucket], end = g.first[bucket + 1]; k < end; ++k)
+            if (!f(g.entry_tri[g.order[k]])) return false;
+        return true;
+    };
+    if (!bucket_range(g.groups)) return false;
+    for (i64 x = r.lo[0]; x <= r.hi[0]; ++x)
+        for (i64 y = r.lo[1]; y <= r.hi[1]; ++y)
+            for (i64 z = r.lo[2]; z <= r.hi[2]; ++z)
+                if (!bucket_range(g.bucket(x, y, z))) return false;
+    return true;
+}
+
+} // namespace tetiso::reduction
