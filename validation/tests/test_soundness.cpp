@@ -18,11 +18,13 @@
 #include <vector>
 
 #include "extract_rules.hpp"
+#include "reduce/contact.hpp"
 #include "test_support.hpp"
 #include "tetiso/check.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/lattice.hpp"
+#include "tetiso/reduce.hpp"
 #include "tetiso/schedule.hpp"
 #include "tetiso/seam.hpp"
 
@@ -168,6 +170,103 @@ TEST(SurfacesAreClean, ThePapersNodeOfTheN500Lattice) {
     TaskRecord record;
     const Piece piece = job.execute(task, nullptr, nullptr, record, TaskThreads{});
     EXPECT_EQ(violations(piece), "");
+}
+
+// ------------------------------------------- reductions that crossed themselves
+
+// The legality tests judged contact only between faces that share a corner;
+// the soak's reduced surfaces that crossed themselves (results/soundness)
+// were each a new face carried through a face it shares nothing with. The
+// smallest job of each kind, as the soak drew it (seed: job).
+
+// A job's result, checked; skipped where self-intersections cannot be
+// measured (tetiso built without CGAL).
+#define EXPECT_CLEAN_JOB(config)                                                   \
+    do {                                                                           \
+        if (!have_self_intersections()) GTEST_SKIP() << "built without CGAL";     \
+        EXPECT_EQ(violations(run_local(Job(config), {}).surface), "");             \
+    } while (0)
+
+// Seed 43, job 521: a collapse at the lattice's border whose new fan passes
+// through four faces of a sheet that folds back past it, none of which
+// shares a corner with the fan (round 6; 4 crossing pairs).
+TEST(ReducedSurfacesAreClean, AFanThroughFacesItSharesNoCornerWith) {
+    if (!have_self_intersections()) GTEST_SKIP() << "built without CGAL";
+    const std::string field =
+        "(0.921*cos(1.706*x+2.866*y+-2.436*z+1.675))*(min(sqrt((sqrt((x-2.993)^2+(y-2.048)^2)-0.944)^2+(z-2.09)^2),"
+        "0.972*x+0.268*y+-0.822*z))";
+    const Piece raw = test::lattice_surface(7, 1, field, -0.06763477623462677);
+    ASSERT_EQ(violations(raw), "");
+    ReduceOptions options;
+    options.phi = 0.9;
+    options.max_error = 0.25;
+    for (const int threads : {1, 2}) {
+        options.threads = threads;
+        EXPECT_EQ(violations(reduce(raw, options)), "") << threads << " threads";
+    }
+}
+
+// Seed 42, job 2688: the same inside one of two domains (4 crossing pairs).
+TEST(ReducedSurfacesAreClean, AFanThroughFacesItSharesNoCornerWithInADomain) {
+    JobConfig config;
+    config.lattice = 9;
+    config.domains = 2;
+    config.field = "0.569*cos(0.378*x+-1.519*y+1.937*z+0.517)";
+    config.level = 0.46064603328704834;
+    config.seam_rings = 0;
+    config.sample_rings = 1;
+    config.max_error_spacings = 0;
+    config.reduce_options.phi = 0.7;
+    EXPECT_CLEAN_JOB(config);
+}
+
+// Seed 42, job 745: the same on a Gmsh mesh (6 crossing pairs).
+TEST(ReducedSurfacesAreClean, AFanThroughFacesItSharesNoCornerWithOnAMesh) {
+    JobConfig config;
+    config.mesh = std::string(TETISO_MESHES_DIR) + "/solver/cube-4.1.msh";
+    config.domains = 1;
+    config.field = "0.811*cos(2.885*x+-0.002*y+2.441*z+0.505)";
+    config.level = 0.5462812185287476;
+    config.seam_rings = 1;
+    config.sample_rings = 0;
+    config.max_error_spacings = 0.5;
+    config.reduce_options.phi = 0.7;
+    EXPECT_CLEAN_JOB(config);
+}
+
+// Seed 43, job 919: a seam reduces a region around the interface as a piece
+// of its own, and pushed it through the rest of the surface, which its
+// tests could not see (8 crossing pairs with one seam ring, none with 0).
+TEST(ReducedSurfacesAreClean, ASeamRegionPushedThroughTheRestOfThePiece) {
+    JobConfig config;
+    config.lattice = 16;
+    config.domains = 8;
+    config.field = "paper";
+    config.level = -1.8116562366485596;
+    config.seam_rings = 1;
+    config.sample_rings = 1;
+    config.max_error_spacings = 0.5;
+    config.reduce_options.phi = 0.7;
+    EXPECT_CLEAN_JOB(config);
+}
+
+// The contact test itself: triangles that cross, that touch within rounding,
+// that lie side by side in one plane, and that are apart.
+TEST(ContactTest, TrianglesThatShareNoCorner) {
+    using reduction::Vec;
+    using reduction::triangles_meet;
+    const Vec a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
+    // A triangle piercing (a, b, c) through its interior.
+    EXPECT_TRUE(triangles_meet(a, b, c, {0.2, 0.2, -1}, {0.3, 0.2, 1}, {0.2, 0.3, 1}));
+    // One whose corner lies on (a, b, c), and one an ulp above it.
+    EXPECT_TRUE(triangles_meet(a, b, c, {0.25, 0.25, 0}, {0.3, 0.2, 1}, {0.2, 0.3, 1}));
+    EXPECT_TRUE(triangles_meet(a, b, c, {0.25, 0.25, 1e-7}, {0.3, 0.2, 1}, {0.2, 0.3, 1}));
+    // In the plane: overlapping, then beside it.
+    EXPECT_TRUE(triangles_meet(a, b, c, {0.5, -0.5, 0}, {0.5, 2, 0}, {-1, 0.5, 0}));
+    EXPECT_FALSE(triangles_meet(a, b, c, {1, 1, 0}, {2, 1, 0}, {1, 2, 0}));
+    // Above it, and crossing its plane beside it.
+    EXPECT_FALSE(triangles_meet(a, b, c, {0.2, 0.2, 0.1}, {0.3, 0.2, 1}, {0.2, 0.3, 1}));
+    EXPECT_FALSE(triangles_meet(a, b, c, {2, 2, -1}, {3, 2, 1}, {2, 3, 1}));
 }
 
 } // namespace

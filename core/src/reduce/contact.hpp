@@ -244,18 +244,26 @@ TETISO_HD inline bool segment_meets(Vec a, Vec b, Vec c, Vec n, Vec q0, Vec q1, 
 
 // Whether triangles p and q, which share no corner, meet or come within a
 // few units in the last place of their coordinates (contact that rounding
-// would decide). Degenerate ones are not judged (the other tests keep new
-// faces from being degenerate).
+// would decide). A degenerate one (zero area: a segment or a point) meets
+// the other where one of its sides does.
 TETISO_HD inline bool triangles_meet(Vec p0, Vec p1, Vec p2, Vec q0, Vec q1, Vec q2) {
     Vec np, nq;
-    if (!(quality(p0, p1, p2, &np) > 0) || !(quality(q0, q1, q2, &nq) > 0)) return false;
+    const bool p_flat = !(quality(p0, p1, p2, &np) > 0), q_flat = !(quality(q0, q1, q2, &nq) > 0);
     double extent = 0.0;
     for (const Vec v : {p0, p1, p2, q0, q1, q2})
         extent = std::max(extent, std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z))));
     const double eps = kContactUlps * std::numeric_limits<float>::epsilon() * extent;
-    return segment_meets(q0, q1, q2, nq, p0, p1, eps) || segment_meets(q0, q1, q2, nq, p1, p2, eps) ||
-           segment_meets(q0, q1, q2, nq, p2, p0, eps) || segment_meets(p0, p1, p2, np, q0, q1, eps) ||
-           segment_meets(p0, p1, p2, np, q1, q2, eps) || segment_meets(p0, p1, p2, np, q2, q0, eps);
+    if (p_flat && q_flat) {
+        const Vec p[3] = {p0, p1, p2}, q[3] = {q0, q1, q2};
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                if (segment_distance(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3]) <= eps) return true;
+        return false;
+    }
+    return (!q_flat && (segment_meets(q0, q1, q2, nq, p0, p1, eps) || segment_meets(q0, q1, q2, nq, p1, p2, eps) ||
+                        segment_meets(q0, q1, q2, nq, p2, p0, eps))) ||
+           (!p_flat && (segment_meets(p0, p1, p2, np, q0, q1, eps) || segment_meets(p0, p1, p2, np, q1, q2, eps) ||
+                        segment_meets(p0, p1, p2, np, q2, q0, eps)));
 }
 
 // Calls f(t) for every triangle in the cells around box (several times for

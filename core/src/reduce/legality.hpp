@@ -19,6 +19,9 @@
 //  - no new contact: faces that share a corner meet nowhere else, among the
 //    new faces and between them and the faces around their outer corners
 //    (see Cones below); contacts the replaced faces had already do not count;
+//  - no contact with distant faces: every other face of the round's start
+//    near the new faces (contact.hpp's grid), and every obstacle, stays
+//    more than a few ulps from each of them (clear_of_distant);
 //  - error: the samples of every face of both leaves are re-measured against
 //    the new faces (error_bound.hpp); each must lie within max_error of one
 //    of them (less its own bound from earlier calls), and goes to it. The new
@@ -342,10 +345,13 @@ struct FaceCorners {
 
 // faces: the number of new faces; face_at(k): new face k; replaced(x, y,
 // z): whether the face with these corners is one the operation removes or
-// rewrites. box: holds every new face.
-template <class FaceAt, class Replaced>
+// rewrites; had_met(k, px, py, pz): whether the faces new face k replaces
+// met that triangle already (a contact the input had is no new one: where
+// extraction left coincident vertices, cleaning them up must stay
+// possible). box: holds every new face.
+template <class FaceAt, class Replaced, class HadMet>
 TETISO_HD bool clear_of_distant(const RoundView& m, const Box& box, int faces, const FaceAt& face_at,
-                                const Replaced& replaced) {
+                                const Replaced& replaced, const HadMet& had_met) {
     if (!m.contact.on) return true;
     const double reach = std::max({std::abs(box.lo.x), std::abs(box.lo.y), std::abs(box.lo.z), std::abs(box.hi.x),
                                    std::abs(box.hi.y), std::abs(box.hi.z)});
@@ -370,7 +376,7 @@ TETISO_HD bool clear_of_distant(const RoundView& m, const Box& box, int faces, c
                 shared = shared || (surface ? id == x || id == y || id == z : same(a, px) || same(a, py) || same(a, pz));
             }
             if (shared || box_of(f.at[0], f.at[1], f.at[2]).apart(tb, margin)) continue;
-            if (triangles_meet(f.at[0], f.at[1], f.at[2], px, py, pz)) return false;
+            if (triangles_meet(f.at[0], f.at[1], f.at[2], px, py, pz) && !had_met(k, px, py, pz)) return false;
         }
         return true;
     });
@@ -387,7 +393,10 @@ TETISO_HD inline bool collapse_clear_of_distant(const RoundView& m, i32 u, i32 w
     return clear_of_distant(
         m, box, fan.count,
         [&](int f) { return FaceCorners{{-1, fan.ia[f], fan.ib[f]}, {fan.p, fan.a(f), fan.b(f)}}; },
-        [&](i32 x, i32 y, i32 z) { return x == u || x == w || y == u || y == w || z == u || z == w; });
+        [&](i32 x, i32 y, i32 z) { return x == u || x == w || y == u || y == w || z == u || z == w; },
+        [&](int f, Vec px, Vec py, Vec pz) {
+            return triangles_meet(m.s.pos(fan.end[f]), fan.a(f), fan.b(f), px, py, pz);
+        });
 }
 
 // ---------------------------------------------------------------------------
@@ -639,10 +648,13 @@ TETISO_HD inline bool propose_flip(const RoundView& m, i32 e, const OpsView& ops
     Box box{pu, pu};
     for (const Vec q : {pw, pc, pd}) box.add(q);
     const FaceCorners made[2] = {{{c, u, d}, {pc, pu, pd}}, {{d, w, c}, {pd, pw, pc}}};
-    if (!clear_of_distant(m, box, 2, [&](int k) { return made[k]; }, [&](i32 x, i32 y, i32 z) {
-            return (x == u || y == u || z == u) && (x == w || y == w || z == w);
-        }))
-        return false;
+    const auto replaced = [&](i32 x, i32 y, i32 z) {
+        return (x == u || y == u || z == u) && (x == w || y == w || z == w);
+    };
+    const auto had_met = [&](int, Vec px, Vec py, Vec pz) {
+        return triangles_meet(pu, pw, pc, px, py, pz) || triangles_meet(pw, pu, pd, px, py, pz);
+    };
+    if (!clear_of_distant(m, box, 2, [&](int k) { return made[k]; }, replaced, had_met)) return false;
     // Error: the gap between the two diagonals.
     const Vec axis = cross(pw - pu, pd - pc);
     const double axis_len = norm(axis);
