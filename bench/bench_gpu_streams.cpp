@@ -1,20 +1,26 @@
-// Many domains in flight on one GPU through several streams: the domain
-// tasks of the lattice job (the paper field, the job's error bound, samples
+// Many domains in flight on one GPU, through several streams and through
+// batches (run_domain_tasks: B domains' pieces reduced side by side in one
+// set of rounds): the domain tasks of the lattice job (the paper field, the job's error bound, samples
 // kept near the interfaces, as Job::execute runs them) on K CUDA Devices of
 // one GPU, each driven by its own host thread, the threads pulling domains
-// from one shared counter. K = 1 is one domain after another on one Device.
+// from one shared counter, B domains at a time. K = 1, B = 1 is one domain
+// after another on one Device.
 // For each K the same domains run twice on the same Devices: "cold", while
 // their buffers still grow (each growth waits for the whole device), and
 // "warm", as a long job sees them. The CPU runs the same domains too, one
 // domain per thread with one thread each on every core: the comparison the
 // resource manager makes between a GPU and the cores.
 //
-// Every domain's piece, from every K and from the CPU, must be the K = 1
-// piece byte for byte; one that differs is named and the program exits 1.
+// Every domain's piece, from every K, B and from the CPU, must be the first
+// run's piece byte for byte; one that differs is named and the program
+// exits 1.
 //
 // Usage: bench_gpu_streams [--lattice=N] [--domains=D] [--count=M]
-//   [--pick=spread|first] [--streams=1,2,4,8,16] [--cpu-threads=T] [--no-cpu]
-//   [--json=FILE]
+//   [--pick=spread|first] [--streams=1,2,4,8,16] [--batches=1] [--cpu-threads=T]
+//   [--cpu-batches=1] [--no-cpu] [--json=FILE]
+// Each K of --streams runs with each B of --batches. On the CPU, B > 1 of
+// --cpu-batches extracts B domains and reduces their pieces in one host
+// reduce_batch (what run_domain_tasks would do if it batched on the host).
 // M domains of the N^3 lattice cut in D (spread: every D/M-th domain, so
 // that the sample holds the job's mix of empty and crossed domains; first:
 // domains 0..M-1). Writes one JSON object (stdout, or FILE) and a table to
@@ -55,6 +61,8 @@ struct Options {
     int count = 64;
     bool spread = true;
     std::vector<int> streams{1, 2, 4, 8, 16};
+    std::vector<int> batches{1};
+    std::vector<int> cpu_batches{1};
     int cpu_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
     bool cpu = true;
     std::string json;
@@ -85,12 +93,13 @@ Options parse(int argc, char** argv) {
         else if (name == "--no-cpu" && eq == std::string::npos) o.cpu = false;
         else if (name == "--json") o.json = value;
         else if (name == "--pick" && (value == "spread" || value == "first")) o.spread = value == "spread";
-        else if (name == "--streams") {
-            o.streams.clear();
-            std::stringstream list(value);
-            for (std::string item; std::getline(list, item, ',');)
-                o.streams.push_back(static_cast<int>(parse_number(arg, item, 1)));
-            if (o.streams.empty()) bad_option(arg, "want a list of stream counts");
+        else if (name == "--streams" || name == "--batches" || name == "--cpu-batches") {
+            std::vector<int>& list = name == "--streams" ? o.streams : name == "--batches" ? o.batches : o.cpu_batches;
+            list.clear();
+            std::stringstream items(value);
+            for (std::string item; std::getline(items, item, ',');)
+                list.push_back(static_cast<int>(parse_number(arg, item, 1)));
+            if (list.empty()) bad_option(arg, "want a list of counts");
         } else {
             bad_option(arg, "unknown option");
         }
@@ -121,14 +130,23 @@ struct Task {
     tetiso::ReduceOptions reduce;
     float level;
     int sample_rings;
+    bool host_batch = false; // on the host: extract each domain, then one reduce_batch
 
-    tetiso::DomainTaskResult run(int domain, const tetiso::Device& device) const {
+    // The domains' tasks in one call (a batch on a GPU).
+    std::vector<tetiso::DomainTaskResult> run(const std::vector<int>& domains, const tetiso::Device& device) const {
         tetiso::DomainTaskOptions options;
         options.level = level;
         options.device = device;
         options.reduce = reduce;
-        tetiso::DomainTaskResult done = tetiso::run_domain_task(*partition, domain, options);
-        tetiso::keep_samples_near_locked(done.piece, sample_rings);
+        if (host_batch && !device.is_gpu()) options.reduce.reset();
+        std::vector<tetiso::DomainTaskResult> done = tetiso::run_domain_tasks(*partition, domains, options);
+        if (host_batch && !device.is_gpu()) {
+            std::vector<tetiso::Piece> pieces;
+            for (tetiso::DomainTaskResult& d : done) pieces.push_back(std::move(d.piece));
+            std::vector<tetiso::Piece> reduced = tetiso::reduce_batch(pieces, reduce);
+            for (std::size_t i = 0; i < done.size(); ++i) done[i].piece = std::move(reduced[i]);
+        }
+        for (tetiso::DomainTaskResult& d : done) tetiso::keep_samples_near_locked(d.piece, sample_rings);
         return done;
     }
 };
@@ -139,9 +157,10 @@ struct Outcome {
     double seconds = 0;
 };
 
-// The domains on one Device per thread, each thread taking the next domain
-// of a shared counter. An exception in a thread ends the program.
-Outcome run_threads(const Task& task, const std::vector<int>& domains, const std::vector<tetiso::Device>& devices) {
+// The domains on one Device per thread, each thread taking the next `batch`
+// domains of a shared counter. An exception in a thread ends the program.
+Outcome run_threads(const Task& task, const std::vector<int>& domains, const std::vector<tetiso::Device>& devices,
+                    int batch = 1) {
     Outcome out;
     out.pieces.resize(domains.size());
     out.triangles_in.resize(domains.size());
@@ -152,10 +171,17 @@ Outcome run_threads(const Task& task, const std::vector<int>& domains, const std
     for (const tetiso::Device& device : devices)
         threads.emplace_back([&, device] {
             try {
-                for (std::size_t i; (i = next.fetch_add(1)) < domains.size() && !failed;) {
-                    tetiso::DomainTaskResult done = task.run(domains[i], device);
-                    out.triangles_in[i] = done.triangles_extracted;
-                    out.pieces[i] = std::move(done.piece);
+                const auto step = static_cast<std::size_t>(batch);
+                for (std::size_t i; (i = next.fetch_add(step)) < domains.size() && !failed;) {
+                    const std::size_t n = std::min(step, domains.size() - i);
+                    std::vector<tetiso::DomainTaskResult> done =
+                        task.run({domains.begin() + static_cast<std::ptrdiff_t>(i),
+                                  domains.begin() + static_cast<std::ptrdiff_t>(i + n)},
+                                 device);
+                    for (std::size_t j = 0; j < n; ++j) {
+                        out.triangles_in[i + j] = done[j].triangles_extracted;
+                        out.pieces[i + j] = std::move(done[j].piece);
+                    }
                 }
             } catch (const std::exception& e) {
                 std::fprintf(stderr, "%s: %s\n", kProgram, e.what());
@@ -173,7 +199,7 @@ bool check(const char* what, const Outcome& got, const Outcome& reference, const
     bool all = true;
     for (std::size_t i = 0; i < domains.size(); ++i)
         if (!same(got.pieces[i], reference.pieces[i])) {
-            std::fprintf(stderr, "%s: %s: domain %d's piece DIFFERS from the one-stream run\n", kProgram, what,
+            std::fprintf(stderr, "%s: %s: domain %d's piece DIFFERS from the first run\n", kProgram, what,
                          domains[i]);
             all = false;
         }
@@ -189,6 +215,7 @@ std::size_t device_memory_used(int gpu) {
 struct Row {
     std::string name;
     int streams = 0; // 0: the CPU
+    int batch = 1;
     double cold_s = 0, warm_s = 0;
     std::size_t buffer_bytes = 0, device_used_bytes = 0;
 };
@@ -198,7 +225,8 @@ std::string json_row(const Row& r, std::size_t domains, std::size_t triangles_in
     s.precision(6);
     const double n = static_cast<double>(domains);
     const double tin = static_cast<double>(triangles_in);
-    s << "{\"name\":\"" << r.name << "\",\"streams\":" << r.streams << ",\"cold_s\":" << r.cold_s
+    s << "{\"name\":\"" << r.name << "\",\"streams\":" << r.streams << ",\"batch\":" << r.batch
+      << ",\"cold_s\":" << r.cold_s
       << ",\"warm_s\":" << r.warm_s << ",\"domains_per_s\":" << n / r.warm_s
       << ",\"raw_triangles_per_s\":" << tin / r.warm_s << ",\"cold_raw_triangles_per_s\":" << tin / r.cold_s
       << ",\"buffer_bytes\":" << r.buffer_bytes << ",\"device_used_bytes\":" << r.device_used_bytes
@@ -242,47 +270,52 @@ int main(int argc, char** argv) {
     Outcome reference;
     std::size_t triangles_in = 0, triangles_out = 0;
     bool all_same = true;
-    for (const int k : o.streams) {
-        std::vector<tetiso::Device> devices;
-        for (int d = 0; d < k; ++d) devices.push_back(tetiso::Device::cuda(0));
-        Row row{"gpu/streams:" + std::to_string(k), k};
-        const Outcome cold = run_threads(task, domains, devices);
-        const Outcome warm = run_threads(task, domains, devices);
-        row.cold_s = cold.seconds;
-        row.warm_s = warm.seconds;
-        row.buffer_bytes = tetiso::Device::gpu_bytes_held();
-        row.device_used_bytes = device_memory_used(0);
-        if (reference.pieces.empty()) {
-            reference = cold;
-            for (std::size_t i = 0; i < domains.size(); ++i) {
-                triangles_in += reference.triangles_in[i];
-                triangles_out += reference.pieces[i].triangle_count();
+    for (const int k : o.streams)
+        for (const int b : o.batches) {
+            std::vector<tetiso::Device> devices;
+            for (int d = 0; d < k; ++d) devices.push_back(tetiso::Device::cuda(0));
+            Row row{"gpu/streams:" + std::to_string(k) + "/batch:" + std::to_string(b), k, b};
+            const Outcome cold = run_threads(task, domains, devices, b);
+            const Outcome warm = run_threads(task, domains, devices, b);
+            row.cold_s = cold.seconds;
+            row.warm_s = warm.seconds;
+            row.buffer_bytes = tetiso::Device::gpu_bytes_held();
+            row.device_used_bytes = device_memory_used(0);
+            if (reference.pieces.empty()) {
+                reference = cold;
+                for (std::size_t i = 0; i < domains.size(); ++i) {
+                    triangles_in += reference.triangles_in[i];
+                    triangles_out += reference.pieces[i].triangle_count();
+                }
             }
+            const std::string name = row.name;
+            all_same &= check((name + " cold").c_str(), cold, reference, domains);
+            all_same &= check((name + " warm").c_str(), warm, reference, domains);
+            rows.push_back(row);
+            std::fprintf(stderr, "%s: %-24s cold %7.3f s  warm %7.3f s  %6.1f domains/s  %6.2f M raw triangles/s  "
+                                 "buffers %6.0f MiB  device %6.0f MiB\n",
+                         kProgram, name.c_str(), row.cold_s, row.warm_s, static_cast<double>(domains.size()) / row.warm_s,
+                         static_cast<double>(triangles_in) / row.warm_s / 1e6,
+                         static_cast<double>(row.buffer_bytes) / (1 << 20),
+                         static_cast<double>(row.device_used_bytes) / (1 << 20));
         }
-        const std::string name = row.name;
-        all_same &= check((name + " cold").c_str(), cold, reference, domains);
-        all_same &= check((name + " warm").c_str(), warm, reference, domains);
-        rows.push_back(row);
-        std::fprintf(stderr, "%s: %-16s cold %7.3f s  warm %7.3f s  %6.1f domains/s  %6.2f M raw triangles/s  "
-                             "buffers %6.0f MiB  device %6.0f MiB\n",
-                     kProgram, name.c_str(), row.cold_s, row.warm_s, static_cast<double>(domains.size()) / row.warm_s,
-                     static_cast<double>(triangles_in) / row.warm_s / 1e6,
-                     static_cast<double>(row.buffer_bytes) / (1 << 20),
-                     static_cast<double>(row.device_used_bytes) / (1 << 20));
-    }
 
     if (o.cpu) {
         // One thread per core, each a host Device doing one domain at a time
         // with one thread, as the job's CPU workers do.
         const std::vector<tetiso::Device> hosts(static_cast<std::size_t>(o.cpu_threads));
-        Row row{"cpu/threads:" + std::to_string(o.cpu_threads), 0};
-        const Outcome cpu = run_threads(task, domains, hosts);
-        row.cold_s = row.warm_s = cpu.seconds;
-        all_same &= check(row.name.c_str(), cpu, reference, domains);
-        rows.push_back(row);
-        std::fprintf(stderr, "%s: %-16s         %7.3f s  %6.1f domains/s  %6.2f M raw triangles/s\n", kProgram,
-                     row.name.c_str(), row.warm_s, static_cast<double>(domains.size()) / row.warm_s,
-                     static_cast<double>(triangles_in) / row.warm_s / 1e6);
+        for (const int b : o.cpu_batches) {
+            Row row{"cpu/threads:" + std::to_string(o.cpu_threads) + (b > 1 ? "/batch:" + std::to_string(b) : ""), 0, b};
+            Task on_host = task;
+            on_host.host_batch = b > 1;
+            const Outcome cpu = run_threads(on_host, domains, hosts, b);
+            row.cold_s = row.warm_s = cpu.seconds;
+            all_same &= check(row.name.c_str(), cpu, reference, domains);
+            rows.push_back(row);
+            std::fprintf(stderr, "%s: %-24s         %7.3f s  %6.1f domains/s  %6.2f M raw triangles/s\n", kProgram,
+                         row.name.c_str(), row.warm_s, static_cast<double>(domains.size()) / row.warm_s,
+                         static_cast<double>(triangles_in) / row.warm_s / 1e6);
+        }
     }
 
     std::ostringstream json;
@@ -305,10 +338,10 @@ int main(int argc, char** argv) {
         }
     }
     if (!all_same) {
-        std::fprintf(stderr, "%s: a piece differed from the one-stream run: these figures are void\n", kProgram);
+        std::fprintf(stderr, "%s: a piece differed from the first run: these figures are void\n", kProgram);
         return 1;
     }
-    std::fprintf(stderr, "%s: every piece, from every stream count and the CPU, is the one-stream run's, byte for byte\n",
+    std::fprintf(stderr, "%s: every piece, from every stream count, batch and the CPU, is the first run's, byte for byte\n",
                  kProgram);
     return 0;
 }

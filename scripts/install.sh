@@ -16,6 +16,8 @@ packages=(
   tetgen libmetis-dev                                # meshes/make_meshes.sh; splitting them into domains
   clang                                              # libFuzzer targets of the readers (tools/fuzz.sh)
   python3-dolfinx python3-gmsh gmsh                  # the worked example (FEniCSx solver) and meshes/solver fixtures
+  python3-dev pybind11-dev python3-numpy python3-mpi4py python3-pytest  # import tetiso (python/) and its tests
+  paraview python3-paraview                          # the ParaView plugin's test (pvbatch, no display)
 )
 # Optional baselines, built and tested only where installed (their tests are
 # the `reference` label): libvtk9-dev (extraction) and libopenmesh-dev

@@ -8,7 +8,9 @@
 #                                     test programs, bench_reduce_gpu, tetiso
 #                                     and the shared libraries the device
 #                                     lacks into .carry/gpu.tar.xz (carry
-#                                     .carry)
+#                                     .carry; TETISO_CARRY=DIR packs into DIR
+#                                     instead, e.g. the main checkout's
+#                                     .carry/NAME from a worktree)
 #   tools/gpu_check.sh run OUT [quick]
 #                                     there: every gpu-labelled test (the CPU
 #                                     reduction suite run on the GPU too, the
@@ -23,10 +25,13 @@
 #   tools/gpu_check.sh jobs OUT COMMIT DEADLINE_S N:D...
 #                                     there: the jobs of
 #                                     results/hardware-comparison/README.md (see
-#                                     jobs() below), under OUT
+#                                     jobs() below), under OUT; GPU_COUNTS="1 2
+#                                     4" (the default) says on how many of the
+#                                     machine's GPUs
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
-carry=$root/.carry/gpu
+pack=${TETISO_CARRY:-$root/.carry}
+carry=$pack/gpu
 programs=(tetiso test_reduce_gpu test_gpu_pipeline test_extract_gpu bench_reduce_gpu)
 
 prepare() {
@@ -47,9 +52,9 @@ prepare() {
         while read -r lib; do cp -L "$lib" "$carry/lib/"; done
     # What travels to the device is limited in size: stripped and packed.
     strip "$carry"/bin/*
-    tar -C "$carry" -cJf "$root/.carry/gpu.tar.xz" bin lib
+    tar -C "$carry" -cJf "$pack/gpu.tar.xz" bin lib
     rm -rf "$carry"
-    du -sh "$root/.carry/gpu.tar.xz"
+    du -sh "$pack/gpu.tar.xz"
 }
 
 run() {
@@ -57,7 +62,7 @@ run() {
     mkdir -p "$out"
     if [ ! -d "$carry/bin" ]; then
         mkdir -p "$carry"
-        tar -C "$carry" -xJf "$root/.carry/gpu.tar.xz"
+        tar -C "$carry" -xJf "$pack/gpu.tar.xz"
     fi
     export LD_LIBRARY_PATH=$carry/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
     export OMP_WAIT_POLICY=passive
@@ -123,62 +128,73 @@ bench() {
 # What results/hardware-comparison/README.md is made from, there: for each case
 # N:D, the job `tetiso run --lattice N --domains D` on every core of the
 # machine (one rank per core, rank 0 the controller), once with --device cpu
-# and once with --device auto, each with its report and wall time, the two
-# surfaces compared with cmp. Cases run in the order given, and one that
-# could not end before DEADLINE_S seconds from the start (judged by the
-# job before it, scaled by the number of nodes, N^3) is skipped, so the lent
-# machine's time limit is never hit mid-job. Then, here,
-# tools/collect_results.py hardware OUT takes them into
-# results/hardware-comparison/ and renders its page.
+# and, on the first G GPUs for each G of GPU_COUNTS the machine has, once
+# with --device gpu and once with --device auto; each with its report
+# (n{N}-d{D}-cpu.json, n{N}-d{D}-{gpu,auto}-g{G}.json) and wall time, every
+# surface compared with cmp against the CPU's (n{N}-d{D}-cmp.txt, a line per
+# run). Cases run in the order given, and a job that could not end before
+# DEADLINE_S seconds from the start (judged by the job before it, scaled by
+# the number of nodes, N^3) is skipped, so the lent machine's time limit is
+# never hit mid-job. Then, here, tools/collect_results.py hardware OUT takes
+# them into results/hardware-comparison/ and renders its page.
 jobs() {
     local out=$1 commit=$2 deadline=$3
     shift 3
     mkdir -p "$out"
     if [ ! -d "$carry/bin" ]; then
         mkdir -p "$carry"
-        tar -C "$carry" -xJf "$root/.carry/gpu.tar.xz"
+        tar -C "$carry" -xJf "$pack/gpu.tar.xz"
     fi
     export LD_LIBRARY_PATH=$carry/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
     export OMP_WAIT_POLICY=passive OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-    local ranks
+    local ranks available
     ranks=$(nproc)
+    available=$(nvidia-smi -L | grep -c '^GPU')
     local started=$SECONDS last=0 last_n=1 failed=0
-    local -a launch=(mpirun --bind-to core -np "$ranks")
+    local -a launch=(mpirun --bind-to core -np "$ranks" -x CUDA_VISIBLE_DEVICES)
     python3 "$root/tools/bench_meta.py" "$out/meta.json" \
         "script_cmd=tools/gpu_check.sh jobs OUT $commit $deadline $*" "commit=$commit" \
         "source_state=Release build for sm_90 of commit $commit, made by tools/gpu_check.sh prepare" \
         "gpu=$(nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader | paste -sd';')" \
-        "launcher=${launch[*]}" "environment=OMP_WAIT_POLICY=passive" "load_before=$(cut -d' ' -f1-3 /proc/loadavg)"
+        "gpu_counts=${GPU_COUNTS:-1 2 4}" "launcher=${launch[*]}" "environment=OMP_WAIT_POLICY=passive" \
+        "load_before=$(cut -d' ' -f1-3 /proc/loadavg)"
     for case in "$@"; do
         local n=${case%%:*} d=${case##*:}
-        for device in cpu auto; do
-            local name=n$n-d$d-$device
+        local -a modes=(cpu)
+        for g in ${GPU_COUNTS:-1 2 4}; do
+            [ "$g" -le "$available" ] && modes+=("gpu-g$g" "auto-g$g")
+        done
+        rm -f "$out/n$n-d$d-cmp.txt"
+        for mode in "${modes[@]}"; do
+            local name=n$n-d$d-$mode device=${mode%-g*} visible=""
+            [ "$mode" != cpu ] && visible=$(seq -s, 0 $((${mode##*-g} - 1)))
             if [ $((SECONDS - started + last * n * n * n / (last_n * last_n * last_n))) -gt "$deadline" ]; then
                 echo "$name: skipped (would pass the deadline)"
                 continue
             fi
             local t0=$SECONDS
-            timeout $((deadline - (SECONDS - started))) "${launch[@]}" "$carry/bin/tetiso" run --lattice "$n" \
-                --domains "$d" --device "$device" --quiet -o "/tmp/$name.vtp" --report "$out/$name.json" \
-                >"$out/$name.log" 2>&1 || {
+            CUDA_VISIBLE_DEVICES=$visible timeout $((deadline - (SECONDS - started))) "${launch[@]}" \
+                "$carry/bin/tetiso" run --lattice "$n" --domains "$d" --device "$device" --quiet -o "/tmp/$name.vtp" \
+                --report "$out/$name.json" >"$out/$name.log" 2>&1 || {
                 echo "$name: FAILED"
                 tail -5 "$out/$name.log"
                 failed=1
                 continue
             }
             last=$((SECONDS - t0)) last_n=$n
-            echo "$name: ${last} s wall"
-        done
-        if [ -e "/tmp/n$n-d$d-cpu.vtp" ] && [ -e "/tmp/n$n-d$d-auto.vtp" ]; then
-            if cmp -s "/tmp/n$n-d$d-cpu.vtp" "/tmp/n$n-d$d-auto.vtp"; then
-                echo "identical" >"$out/n$n-d$d-cmp.txt"
-            else
-                echo "DIFFER" >"$out/n$n-d$d-cmp.txt"
-                failed=1
+            echo "$name: ${last} s wall, $(python3 -c "import json, sys; s = json.load(open(sys.argv[1]))['seconds']; print('total %.2f s, job %.2f s' % (s['total'], s['job']))" "$out/$name.json")"
+            if [ "$mode" != cpu ] && [ -e "/tmp/n$n-d$d-cpu.vtp" ]; then
+                if cmp -s "/tmp/n$n-d$d-cpu.vtp" "/tmp/$name.vtp"; then
+                    echo "$mode identical" >>"$out/n$n-d$d-cmp.txt"
+                else
+                    echo "$mode DIFFER" >>"$out/n$n-d$d-cmp.txt"
+                    failed=1
+                fi
+                rm -f "/tmp/$name.vtp"
             fi
-            echo "n$n-d$d: cpu and auto surfaces $(cat "$out/n$n-d$d-cmp.txt")"
-            rm -f "/tmp/n$n-d$d-cpu.vtp" "/tmp/n$n-d$d-auto.vtp"
-        fi
+        done
+        [ -e "$out/n$n-d$d-cmp.txt" ] && echo "n$n-d$d: against cpu: $(paste -sd' ' "$out/n$n-d$d-cmp.txt")"
+        rm -f "/tmp/n$n-d$d-cpu.vtp"
     done
     return $failed
 }

@@ -9,7 +9,7 @@ from collections import Counter
 
 from render_results import (bench_provenance, bullets, figure, load, load_aggregates, plot_timeline, runs_provenance,
                             save, table, topology_summary)
-from results_pages_gpu import gpu_streams, hardware_comparison, reduce_gpu
+from results_pages_gpu import gpu_streams, hardware_comparison, reduce_batch, reduce_gpu
 
 
 def mega(value):
@@ -477,11 +477,60 @@ def soundness(folder):
                            f"{c['commit']}; started {c['started']}; {c['machine']}" for c in campaigns))
 
 
+def insitu(folder):
+    """tools/bench_insitu.sh: every runs-N.json of the folder, N ascending."""
+    runs = sorted((json.loads(f.read_text()) for f in folder.glob("runs-*.json")), key=lambda r: r["n"])
+    rows, stages = [], []
+    for r in runs:
+        calls, med = r["insitu"]["calls"], statistics.median
+        call, call_cpu = med(c["wall"] for c in calls), med(c["cpu"] for c in calls)
+        write, read = r["write"], r["read"]
+        run, run_cpu = med(x["wall"] for x in r["run"]), med(x["cpu"] for x in r["run"])
+        file_wall = write["seconds"] + run + med(read["seconds"])
+        file_cpu = write["cpu"] + run_cpu + med(read["cpu"])
+        rows.append([f"{r['n']}³", r["ranks"], f"{calls[0]['session']:.2f}", f"{call:.2f} ({call_cpu:.2f})",
+                     f"{write['seconds']:.2f} ({write['cpu']:.2f})", f"{run:.2f} ({run_cpu:.2f})",
+                     f"{med(read['seconds']):.3f}", f"{file_wall:.2f} ({file_cpu:.2f})",
+                     f"**{file_wall / call:.2f}×** ({file_cpu / call_cpu:.2f}×)", f"{write['bytes'] / 2**30:.2f}",
+                     "yes" if r["same_bytes"] else "**no**"])
+        for q, rank in enumerate(calls[-1]["ranks"]):
+            stages.append([f"{r['n']}³", q] + [f"{rank[k]:.2f}" for k in ("check", "scan", "pool", "domain", "seams",
+                                                                         "write", "total")]
+                          + [f"{int(rank['tetrahedra']):,}", f"{int(rank['extracted']):,}", f"{int(rank['reduced']):,}",
+                             f"{int(rank['bytes_sent']):,}"])
+    return dict(runs=runs, same=all(r["same_bytes"] for r in runs),
+                comparison=table(["lattice", "ranks", "session s", "call s (median)", "write .pvtu s",
+                                  "tetiso run s (median)", "read surface s", "file route s", "file route / call",
+                                  ".pvtu GiB", "same bytes"], rows),
+                stages=table(["lattice", "rank", "check", "scan", "pool", "domain", "seams", "write", "total",
+                              "tetrahedra", "triangles extracted", "after reduction", "bytes sent"], stages),
+                provenance=bullets([f"`{r['command']}`: commit `{r['commit']}`, {r['machine']}, load average before "
+                                    f"{r['load_before']}, {r['date']}" for r in runs]))
+
+
+def python_binding(folder):
+    data = load(folder, "runs.json")
+    cases = {c["name"]: c for c in data["cases"]}
+    median = {name: statistics.median(c["seconds"]) for name, c in cases.items()}
+
+    def micro(seconds):
+        return f"{seconds * 1e6:,.2f}" if seconds < 1e-3 else f"{seconds * 1e6:,.0f}"
+    machine = data["machine"]
+    return dict(
+        data=data, median=median,
+        cases_table=table(["call", "median µs", "fastest µs", "calls per batch", "batches"],
+                          [[c["label"], micro(median[c["name"]]), micro(min(c["seconds"])), f"{c['calls_per_batch']:,}",
+                            len(c["seconds"])] for c in data["cases"]]),
+        machine=f"{machine['cpu_model']}, {machine['cpus']} CPUs, {machine['memory']}, {machine['kernel']}")
+
+
 PAGES = {
+    "insitu": (insitu, "insitu", "insitu/README.md"),
     "paper-reproduction": (paper_reproduction, "paper-reproduction", "paper-reproduction.md"),
     "hardware-comparison": (hardware_comparison, "hardware-comparison", "hardware-comparison/README.md"),
     "reduce-gpu": (reduce_gpu, "reduce-gpu", "reduce-gpu/README.md"),
     "gpu-streams": (gpu_streams, "gpu-streams", "gpu-streams/README.md"),
+    "reduce-batch": (reduce_batch, "reduce-batch", "reduce-batch/README.md"),
     "extract-gpu": (extract_gpu, "extract-gpu", "extract-gpu/README.md"),
     "scale": (scale, "scale", "scale/README.md"),
     "fuzz": (fuzz, "fuzz", "fuzz/README.md"),
@@ -490,4 +539,5 @@ PAGES = {
     "mesh": (mesh, "mesh", "mesh/README.md"),
     "reduce": (reduce, "reduce", "reduce/README.md"),
     "extract": (extract, "extract", "extract/README.md"),
+    "python-binding": (python_binding, "python-binding", "python-binding/README.md"),
 }

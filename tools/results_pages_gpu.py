@@ -132,8 +132,42 @@ def reduce_gpu_before_after(folder, n):
                 ncu_after=ncu_table(ncu_kernels(folder / "ncu_dry_run.txt")))
 
 
-HARDWARE_TARGETS = {(500, 125): "≤ 2 s with auto, and auto ≥ 10× cpu (one GPU, 16 cores)",
-                    (1000, 1000): "≤ 15 s with auto on two GPUs (`nvidia-h100-x2`)"}
+# Issue 41's wall times (seconds.total), by case and run.
+HARDWARE_TARGETS = {(500, 125, "auto-g2"): 2.0, (1000, 1000, "auto-g1"): 12.0, (1000, 1000, "auto-g2"): 8.0,
+                    (1000, 1000, "auto-g4"): 5.0}
+
+
+def hardware_mode_key(mode):
+    """cpu first, then by GPUs, gpu before auto."""
+    if mode == "cpu":
+        return (0, 0, 0)
+    device, gpus = mode.rsplit("-g", 1)
+    return (1, int(gpus), ("gpu", "auto").index(device))
+
+
+def hardware_mode_name(mode):
+    if mode == "cpu":
+        return "cpu"
+    device, gpus = mode.rsplit("-g", 1)
+    return f"{device}, {gpus} GPU{'s' if gpus != '1' else ''}"
+
+
+def hardware_runs(folder, stem):
+    """A case's reports by run (cpu, gpu-gG, auto-gG; an `auto` of one GPU
+    from before runs were named by their GPUs is auto-g1) and each run's
+    verdict against the CPU's surface."""
+    runs = {}
+    for path in folder.glob(f"{stem}-*.json.gz"):
+        mode = path.name[len(stem) + 1: -len(".json.gz")]
+        runs["auto-g1" if mode == "auto" else mode] = json.loads(gzip.decompress(path.read_bytes()))
+    verdicts = {}
+    for line in (folder / f"{stem}-cmp.txt").read_text().splitlines():
+        words = line.split()
+        if len(words) == 1:
+            verdicts["auto-g1"] = words[0]
+        elif words:
+            verdicts[words[0]] = words[1]
+    return dict(sorted(runs.items(), key=lambda kv: hardware_mode_key(kv[0]))), verdicts
 
 
 def by_device(report):
@@ -159,50 +193,58 @@ def hardware_comparison(folder):
     for path in folder.glob("n*-d*-cpu.json.gz"):
         stem = path.name[: -len("-cpu.json.gz")]
         n, d = (int(part[1:]) for part in stem.split("-"))
-        cases[n, d] = ({mode: json.loads(gzip.decompress((folder / f"{stem}-{mode}.json.gz").read_bytes()))
-                        for mode in ("cpu", "auto")}, (folder / f"{stem}-cmp.txt").read_text().strip())
+        cases[n, d] = hardware_runs(folder, stem)
     cases = dict(sorted(cases.items(), key=lambda kv: (kv[0][0], -kv[0][1])))
-    job = {(nd, mode): runs[mode]["seconds"]["job"] for nd, (runs, _) in cases.items() for mode in runs}
-    split, stages = [], []
-    for (n, d), (runs, _) in cases.items():
-        for device, r in by_device(runs["auto"]):
-            split.append([f"{n} / {d}", device, r["tasks"], len(r["domains"]), f"{r['busy']:.1f}",
-                          f"{100 * r['busy'] / job[(n, d), 'auto']:.0f}%" if device != "cpu" else "",
-                          f"{r['triangles'] / 1e6:.1f} M", f"{statistics.median(r['domains']):.3f}",
-                          f"{statistics.mean(r['waits']):.2f}"])
-        for mode in ("cpu", "auto"):
-            seams = sum(t["end"] - t["start"] for t in runs[mode]["tasks"] if t["kind"] == "seam")
-            for device, r in by_device(runs[mode]):
+    end_to_end, split, stages = [], [], []
+    for (n, d), (runs, verdicts) in cases.items():
+        cpu_total = runs["cpu"]["seconds"]["total"]
+        for mode, report in runs.items():
+            sec = report["seconds"]
+            target = HARDWARE_TARGETS.get((n, d, mode))
+            end_to_end.append([n, d, hardware_mode_name(mode), f"**{sec['total']:.1f}**", f"{sec['job']:.1f}",
+                               f"{sec['total'] - sec['job'] - sec['write']:.1f}", f"{cpu_total / sec['total']:.2f}×",
+                               "" if mode == "cpu" else verdicts.get(mode, "not compared"),
+                               "" if target is None else
+                               f"≤ {target:g} s: {'met' if sec['total'] <= target else 'missed'}"])
+            seams = sum(t["end"] - t["start"] for t in report["tasks"] if t["kind"] == "seam")
+            for device, r in by_device(report):
+                if mode != "cpu":
+                    split.append([f"{n} / {d}", hardware_mode_name(mode), device, r["tasks"], len(r["domains"]),
+                                  f"{r['busy']:.1f}",
+                                  f"{100 * r['busy'] / sec['job']:.0f}%" if device != "cpu" else "",
+                                  f"{r['triangles'] / 1e6:.1f} M",
+                                  f"{statistics.median(r['domains']):.3f}" if r["domains"] else "—",
+                                  f"{statistics.mean(r['waits']):.2f}"])
                 rate = [f"{r['triangles'] / r['stages'][s] / 1e6:.1f}" if r["stages"][s] else "—"
                         for s in ("generate", "extract", "reduce")]
-                stages.append([f"{n} / {d}", mode, device, *rate, f"{seams:.1f}"])
+                stages.append([f"{n} / {d}", hardware_mode_name(mode), device, *rate, f"{seams:.1f}"])
 
+    modes = sorted({m for runs, _ in cases.values() for m in runs}, key=hardware_mode_key)
     fig, ax = figure(7, 3.8)
-    x = range(len(cases))
-    cpu, auto = [job[nd, "cpu"] for nd in cases], [job[nd, "auto"] for nd in cases]
-    ax.bar([i - 0.2 for i in x], cpu, 0.4, label="--device cpu", color="#4c72b0")
-    ax.bar([i + 0.2 for i in x], auto, 0.4, label="--device auto (CPU cores + GPU)", color="#dd8452")
-    for i, (c, a) in enumerate(zip(cpu, auto)):
-        ax.text(i + 0.2, a, f"{c / a:.2f}×", ha="center", va="bottom", fontsize=8)
-    ax.set_xticks(list(x), [f"N = {n}\n{d} domains" for n, d in cases])
-    ax.set_ylabel("job seconds")
-    ax.set_title(f"tetiso run on {meta['cpus']} cores and one {meta['gpu'].split(',')[0]}")
-    ax.legend()
+    width = 0.8 / len(modes)
+    for j, mode in enumerate(modes):
+        xs = [i - 0.4 + width * (j + 0.5) for i, (runs, _) in enumerate(cases.values()) if mode in runs]
+        ys = [runs[mode]["seconds"]["total"] for runs, _ in cases.values() if mode in runs]
+        ax.bar(xs, ys, width, label=f"--device {hardware_mode_name(mode)}")
+    ax.set_xticks(list(range(len(cases))), [f"N = {n}\n{d} domains" for n, d in cases])
+    ax.set_ylabel("seconds from launch to the written surface")
+    ax.set_title(f"tetiso run on {meta['cpus']} cores and {meta['gpu'].split(',')[0]}")
+    ax.legend(fontsize=7)
     save(fig, folder / "seconds.png", f"{meta['script_cmd']}; commit {meta['commit']}; {meta['date']}\n"
          f"{meta['cpu_model']}, {meta['gpu']}")
+    timeline_runs = cases[500, 125][0]
+    timeline_mode = max((m for m in timeline_runs if m.startswith("auto")), key=hardware_mode_key)
     report = folder / "timeline-report.json"
-    report.write_text(json.dumps(cases[500, 125][0]["auto"]))
+    report.write_text(json.dumps(timeline_runs[timeline_mode]))
     plot_timeline(report, folder / "timeline-n500-d125-auto.png")
     report.unlink()
     return dict(
         meta=meta,
-        end_to_end=table(["N", "domains", "cpu s", "auto s", "auto speed-up", "surfaces (cmp)", "target"],
-                         [[n, d, f"{job[(n, d), 'cpu']:.1f}", f"**{job[(n, d), 'auto']:.1f}**",
-                           f"{job[(n, d), 'cpu'] / job[(n, d), 'auto']:.2f}×", verdict,
-                           HARDWARE_TARGETS.get((n, d), "")]
-                          for (n, d), (_, verdict) in cases.items()]),
-        split=table(["N / domains", "device", "tasks", "domain tasks", "busy s", "GPU busy", "raw triangles",
-                     "median domain s", "mean wait s"], split),
+        timeline_mode=hardware_mode_name(timeline_mode),
+        end_to_end=table(["N", "domains", "--device", "wall s", "job s", "start-up s", "vs cpu", "surface (cmp)",
+                          "target (issue 41)"], end_to_end),
+        split=table(["N / domains", "--device", "device", "tasks", "domain tasks", "busy s", "GPU busy",
+                     "raw triangles", "median domain s", "mean wait s"], split),
         stages=table(["N / domains", "--device", "device", "generate M tris/s", "extract M tris/s", "reduce M tris/s",
                       "seams s (all, CPU)"], stages))
 
@@ -233,3 +275,94 @@ def gpu_streams(folder):
                 cpu=next(r for r in data["rows"] if r["streams"] == 0),
                 streams=table(["K streams", "warm s", "cold s", "domains/s", "raw triangles/s", "per-task latency",
                                "buffers held", "GPU memory used", "host CPU"], rows))
+
+
+def reduce_batch(folder):
+    """bench_gpu_streams --batches: B domains' pieces reduced side by side, on K streams."""
+    data, run = load(folder, "reduce_batch.json"), load(folder, "run.json")
+    gpus = [r for r in data["rows"] if r["streams"] > 0]
+    cpu = next(r for r in data["rows"] if r["streams"] == 0)
+    one = next(r for r in gpus if r["streams"] == 1 and r["batch"] == 1)
+    best = max(gpus, key=lambda r: r["raw_triangles_per_s"])
+    best_one_stream = max((r for r in gpus if r["streams"] == 1), key=lambda r: r["raw_triangles_per_s"])
+    rows = [[r["streams"], r["batch"], f"{r['warm_s']:.2f}", f"{r['cold_s']:.2f}", f"{r['domains_per_s']:.1f}",
+             f"{r['raw_triangles_per_s'] / 1e6:.2f} M", f"{r['raw_triangles_per_s'] / one['raw_triangles_per_s']:.2f}×",
+             f"{r['buffer_bytes'] / 2**20:,.0f} MiB", f"{r['device_used_bytes'] / 2**20:,.0f} MiB"] for r in gpus]
+    cpus = [r for r in data["rows"] if r["streams"] == 0]
+    rows += [[f"CPU, {r['name'].split(':')[1].split('/')[0]} threads", r.get("batch", 1), f"{r['warm_s']:.2f}", "",
+              f"{r['domains_per_s']:.1f}", f"{r['raw_triangles_per_s'] / 1e6:.2f} M",
+              f"{r['raw_triangles_per_s'] / one['raw_triangles_per_s']:.2f}×", "", ""] for r in cpus]
+    # nsys: the GPU time of the trace by kernel, grouped by the step of the round it serves.
+    groups = Counter()
+    total = 0
+    with open(folder / "raw" / "nsys_cuda_gpu_kern_sum.csv") as f:
+        header = f.readline()
+        assert header.startswith("Time (%),Total Time (ns)")
+        for line in f:
+            nanoseconds = int(line.split(",")[1])
+            name = line.split('"')[1] if '"' in line else line.rsplit(",", 1)[1]
+            total += nanoseconds
+            if "dry_run_all" in name and "for_each_heavy_kernel" in name:
+                step = "dry runs: the samples of the leaves placed, one a thread"
+            elif "dry_run_all" in name and "for_each_of_heavy_kernel" in name:
+                step = "dry runs: geometry of the collapses that passed the first stage"
+            elif "dry_run_all" in name:
+                step = "dry runs: placement and connectivity of every candidate (first stage)"
+            elif "marching" in name or "DeviceScanKernel" in name:
+                step = "extraction (marching tetrahedra, its scans)"
+            elif "choose_by_reservations" in name or "claim_chosen" in name:
+                step = "the choice by reservations"
+            elif "order_fans" in name or "build_fans" in name or "group_by_key" in name:
+                step = "fans (grouping and ordering)"
+            else:
+                step = "everything else (edges, geometry, cones, classification, sorts, apply, compaction, samples' sort)"
+            groups[step] += nanoseconds
+    kernels = table(["step", "GPU time", "share"], [[step, f"{ns / 1e9:.3f} s", f"{100 * ns / total:.1f} %"]
+                                                    for step, ns in groups.most_common()])
+    concurrency = (folder / "raw" / "nsys_concurrency.txt").read_text()
+    busy = float(re.search(r"device busy .*?: ([\d.]+)%", concurrency)[1])
+    issue = float(re.search(r"([\d.]+)\s+SM Issue", concurrency)[1])
+    dram = float(re.search(r"([\d.]+)\s+DRAM Read", concurrency)[1])
+    syncs = re.search(r"([\d.]+) s\s+(\d+) calls\s+([\d.]+) us each\s+cudaStreamSynchronize", concurrency)
+    dry_share = 100 * sum(ns for step, ns in groups.items() if step.startswith("dry runs")) / total
+    cpu_batched = max(cpus, key=lambda r: r.get("batch", 1))
+    host = load(folder, "host_batch.json")
+    host_rows = {r.get("batch", 1): r for r in host["rows"] if r["streams"] == 0}
+    # Nsight Compute: the dry runs of the first rounds of the B = 64 batch, the longest four of each stage.
+    import csv
+    import io
+    with gzip.open(folder / "raw" / "ncu_b64.csv.gz", "rt") as f:
+        lines = list(csv.reader(io.StringIO(f.read())))
+    head = lines[0]
+    at = {name: head.index(name) for name in ("ID", "Kernel Name", "Metric Name", "Metric Value", "Metric Unit")}
+    metrics = {}
+    for line in lines[1:]:
+        kernel = metrics.setdefault(int(line[at["ID"]]), {"name": line[at["Kernel Name"]]})
+        value = line[at["Metric Value"]].replace(",", "")
+        if re.fullmatch(r"[\d.]+", value):
+            kernel[line[at["Metric Name"]]] = (float(value), line[at["Metric Unit"]])
+    scale = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
+
+    def stage(name):
+        return ("samples placed" if "for_each_heavy_kernel" in name else
+                "geometry (second stage)" if "for_each_of_heavy_kernel" in name else "placement and connectivity")
+    ncu_rows = []
+    for label in ("placement and connectivity", "geometry (second stage)", "samples placed"):
+        ks = sorted((k for k in metrics.values() if stage(k["name"]) == label),
+                    key=lambda k: -k["Duration"][0] * scale[k["Duration"][1]])[:4]
+        for k in sorted(ks, key=lambda k: -k["Duration"][0] * scale[k["Duration"][1]]):
+            ncu_rows.append([label, f"{k['Duration'][0] * scale[k['Duration'][1]]:.1f}", f"{k['Grid Size'][0]:,.0f}",
+                             f"{k['smsp__thread_inst_executed_per_inst_executed.ratio'][0]:.1f}",
+                             f"{k['Achieved Occupancy'][0]:.0f} %", f"{k['Compute (SM) Throughput'][0]:.0f} %",
+                             f"{k['DRAM Throughput'][0]:.0f} %",
+                             f"{k['l1tex__t_bytes_pipe_lsu_mem_local_op_ld.sum'][0] / 1e9:.0f} / "
+                             f"{k['l1tex__t_bytes_pipe_lsu_mem_local_op_st.sum'][0] / 1e9:.0f} GB"])
+    ncu = table(["dry-run stage", "ms", "blocks", "active threads per warp", "achieved occupancy", "SM throughput",
+                 "DRAM throughput", "local memory loads / stores"], ncu_rows)
+    return dict(data=data, run=run, best=best, best_one_stream=best_one_stream, one=one, cpu=cpu,
+                cpu_batched=cpu_batched, host=host, host_rows=host_rows, run_host=load(folder, "run_host_batch.json"),
+                run_ncu=load(folder, "run_ncu.json"), ncu=ncu, busy=busy,
+                issue=issue, dram=dram, sync_calls=int(syncs[2]), dry_share=dry_share, kernels=kernels,
+                concurrency=concurrency, batches=table(["K streams", "B domains a batch", "warm s", "cold s",
+                                                        "domains/s", "raw triangles/s", "against K = 1, B = 1",
+                                                        "buffers held", "GPU memory used"], rows))

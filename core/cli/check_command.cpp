@@ -4,9 +4,12 @@
 // surface contract that the surface violates, and exit status 1.
 #include <cstdlib>
 #include <iostream>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "commands.hpp"
-#include "tetiso/check.hpp"
+#include "tetiso/check_report.hpp"
 #include "tetiso/io.hpp"
 
 namespace tetiso::cli {
@@ -26,35 +29,17 @@ struct CheckArguments {
 
 void run_check(const CheckArguments& args) {
     const Piece surface = read_piece(args.input);
-    const TopologyReport topology = check_topology(surface);
-    nlohmann::json out = {{"file", args.input.string()}, {"topology", to_json(topology)}};
-    std::optional<std::vector<TrianglePair>> crossings;
-    if (args.self_intersections && have_self_intersections()) {
-        crossings = find_self_intersections(surface);
-        out["self_intersections"] = crossings ? nlohmann::json(crossings->size()) : nlohmann::json(nullptr);
-        if (crossings) out["topology"]["where"]["self_intersections"] = to_json(*crossings, surface);
-    }
-    std::optional<TopologyReport> reference_topology;
-    if (!args.against.empty()) {
-        const Piece reference = read_piece(args.against);
-        reference_topology = check_topology(reference);
-        out["against"] = {
-            {"file", args.against.string()},
-            {"same_signatures", same_signatures(topology, *reference_topology)},
-            {"reference_topology", to_json(*reference_topology)},
-            {"hausdorff", to_json(hausdorff(surface, reference, HausdorffOptions{.vertices_only = args.vertices_only}))},
-        };
-    }
-    std::vector<std::string> violations;
-    if (args.strict) {
-        violations = contract_violations(surface, topology, crossings,
-                                         reference_topology ? &*reference_topology : nullptr);
-        if (args.self_intersections && !have_self_intersections())
-            violations.push_back("self-intersections: not checked, this tetiso was built without CGAL "
-                                 "(--no-self-intersections gates without them)");
-        out["violations"] = violations;
-    }
+    std::optional<Piece> reference;
+    if (!args.against.empty()) reference = read_piece(args.against);
+    nlohmann::json out = check_report(surface, reference ? &*reference : nullptr,
+                                      CheckReportOptions{.self_intersections = args.self_intersections,
+                                                         .vertices_only = args.vertices_only,
+                                                         .strict = args.strict});
+    out["file"] = args.input.string();
+    if (reference) out["against"]["file"] = args.against.string();
     std::cout << out.dump(2) << '\n';
+    if (!args.strict) return;
+    const auto violations = out["violations"].get<std::vector<std::string>>();
     if (violations.empty()) return;
     for (const std::string& line : violations) std::cerr << "tetiso check: " << args.input.string() << ": " << line << '\n';
     std::cout.flush();

@@ -73,10 +73,6 @@ Device open_device(const DeviceChoice& choice);
 // The report's "device": the CPU, or the GPU's name and its seconds by stage.
 nlohmann::json device_json(const Device& device, const StageSeconds& seconds);
 
-// The default error bound of a reduction that knows no lattice spacing, as a
-// fraction of the input's mean edge length.
-inline constexpr double kAutoErrorPerEdgeLength = 0.4;
-double mean_edge_length(const Piece& piece);
 nlohmann::json reduce_json(const ReduceReport& report);
 
 // Fails early, before any work, if `path` cannot be created: its directory

@@ -11,6 +11,7 @@
 #include "tetiso/error.hpp"
 #include "tetiso/io.hpp"
 #include "tetiso/mesh_file.hpp"
+#include "tetiso/placement.hpp"
 #include "tetiso/schedule.hpp"
 
 namespace tetiso::cli {
@@ -185,7 +186,8 @@ void run_job(const RunArguments& args) {
         {"ranks", mpi.size()},
         {"workers", std::max(1, mpi.size() - 1)},
         {"threads", c.threads},
-        {"device", c.device == JobConfig::Device::gpu ? "gpu " + std::to_string(c.gpu)
+        {"gpu_batch", c.gpu_batch},
+        {"device", c.device == JobConfig::Device::gpu ? (c.gpu >= 0 ? "gpu " + std::to_string(c.gpu) : std::string("gpu"))
                    : c.device == JobConfig::Device::automatic ? std::string("auto") : std::string("cpu")},
         {"devices", device_summary(result->tasks)},
         {"spacing", partition.spacing()},
@@ -270,11 +272,20 @@ void add_run_command(CLI::App& app, Command& run) {
         ->check(error_bound_check())
         ->capture_default_str();
     add_device_options(*cmd, args->device, "the domain tasks (extraction and reduction; seams stay on the CPU)", true);
-    cmd->callback([&run, args, domains] {
+    CLI::Option* gpu = cmd->get_option("--gpu");
+    gpu->description("With --device gpu: the one CUDA device of each node to use (0-based, after "
+                     "CUDA_VISIBLE_DEVICES; default: every GPU of each node, one process driving each)")
+        ->default_str("every");
+    cmd->add_option("--gpu-batch", job.gpu_batch,
+                    "The most domain tasks one GPU grant carries, reduced side by side (fewer where the GPU's memory "
+                    "or the end of the queue asks for it; 1: one at a time)")
+        ->check(CLI::Range(1, 4096))
+        ->default_val(kDefaultGpuBatch);
+    cmd->callback([&run, args, domains, gpu] {
         args->job.device = args->device.on_gpu()      ? JobConfig::Device::gpu
                            : args->device.automatic() ? JobConfig::Device::automatic
                                                       : JobConfig::Device::cpu;
-        args->job.gpu = args->device.gpu;
+        args->job.gpu = gpu->count() ? args->device.gpu : -1;
         if (args->job.lattice == 0 && args->job.mesh.empty() && args->job.split.empty())
             throw CLI::ValidationError("give --lattice N, --mesh BASE or --split DIR");
         // With a partition file or a split the count is theirs, unless one is asked for.

@@ -120,6 +120,7 @@ private:
     std::vector<std::uint64_t> tags_;
     std::vector<double> xyz_;
     std::vector<std::uint64_t> tet_tags_;
+    std::vector<std::uint64_t> tet_elements_; // each tetrahedron's element tag
     std::vector<std::uint64_t> other_count_ = std::vector<std::uint64_t>(128, 0);
     std::vector<std::pair<std::uint64_t, double>> values_;
     bool have_view_ = false;
@@ -162,6 +163,7 @@ void MshParser::add_element(int type, const std::uint64_t* nodes, std::uint64_t 
     if (type == kGmshTetrahedron) {
         if (tet_tags_.size() / 4 >= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max())) fail("more tetrahedra than one domain can hold");
         tet_tags_.insert(tet_tags_.end(), nodes, nodes + 4);
+        tet_elements_.push_back(tag);
     } else if (info->dimension == 3) {
         ++other_count_[static_cast<std::size_t>(type)];
     }
@@ -399,6 +401,8 @@ MeshArrays MshParser::parse(const std::string& view) {
     }
     out.tets.resize(corner.size());
     for (std::size_t i = 0; i < corner.size(); ++i) out.tets[i] = kept[static_cast<std::size_t>(corner[i])];
+    out.tet_numbers = std::move(tet_elements_);
+    out.number_word = "element";
     if (!view.empty()) {
         const double unset = std::numeric_limits<double>::quiet_NaN();
         out.f.assign(out.x.size(), unset);

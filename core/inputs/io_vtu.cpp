@@ -259,6 +259,7 @@ MeshArrays VtuParser::parse(const VtuRequest& request) {
                     if (v[j] == v[k]) fail("cell " + std::to_string(c) + " repeats point " + std::to_string(p));
             }
             out.tets.insert(out.tets.end(), v, v + 4);
+            out.tet_numbers.push_back(c);
         } else if (!lower_dimensional(type)) {
             ++other[static_cast<std::size_t>(type)];
         } else if (fixed_corner_count(type) != 0 && corners != fixed_corner_count(type)) {
@@ -267,6 +268,11 @@ MeshArrays VtuParser::parse(const VtuRequest& request) {
         }
         previous = end;
     }
+    // Cell indices name tetrahedra in messages only where they differ.
+    bool renumbered = false;
+    for (std::size_t t = 0; t < out.tet_numbers.size() && !renumbered; ++t)
+        renumbered = out.tet_numbers[t] != t;
+    if (!renumbered) std::vector<std::uint64_t>().swap(out.tet_numbers);
     for (int type = 0; type < 256; ++type)
         if (other[static_cast<std::size_t>(type)])
             fail(std::to_string(other[static_cast<std::size_t>(type)]) + " volume cells of type " + std::to_string(type) +

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "tet_faces.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/io_msh.hpp"
 #include "tetiso/io_vtu.hpp"
@@ -28,32 +29,74 @@ std::string MeshSource::field_description() const {
 }
 
 double signed_volume6(const Domain& d, std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t e) {
-    const auto p = [&](std::int32_t v, int axis) {
-        const auto i = static_cast<std::size_t>(v);
-        return static_cast<double>(axis == 0 ? d.x[i] : axis == 1 ? d.y[i] : d.z[i]);
-    };
-    double u[3], v[3], w[3];
-    for (int k = 0; k < 3; ++k) {
-        u[k] = p(b, k) - p(a, k);
-        v[k] = p(c, k) - p(a, k);
-        w[k] = p(e, k) - p(a, k);
-    }
-    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]);
+    return detail::volume6(
+        [&d](std::int32_t v, int axis) {
+            const auto i = static_cast<std::size_t>(v);
+            return static_cast<double>(axis == 0 ? d.x[i] : axis == 1 ? d.y[i] : d.z[i]);
+        },
+        a, b, c, e);
 }
 
 bool negatively_oriented(const Domain& d, std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t e) {
     return signed_volume6(d, a, b, c, e) < 0;
 }
 
-void orient_tetrahedra(Domain& domain, const std::string& name) {
-    for (std::size_t t = 0; t < domain.tet_count(); ++t) {
-        std::int32_t* v = domain.tets.data() + 4 * t;
-        const double volume = signed_volume6(domain, v[0], v[1], v[2], v[3]);
-        if (volume == 0)
-            throw Error(name + ": tetrahedron " + std::to_string(t) +
-                        " has zero volume (its corners, as stored in float, are coplanar)");
-        if (volume < 0) std::swap(v[2], v[3]);
+std::string detail::TetNames::operator()(std::size_t t) const {
+    std::string text = "tetrahedron " + std::to_string(t);
+    if (numbers && t < count) text += std::string(" (") + word + " " + std::to_string(numbers[t]) + ")";
+    return text;
+}
+
+void detail::refuse_clash(const FaceClash& clash, const std::vector<std::uint8_t>& listed_negative,
+                          const std::string& name, const TetNames& names) {
+    using Kind = FaceClash::Kind;
+    if (clash.kind == Kind::none) return;
+    const std::string others =
+        clash.faces > 1 ? " (" + std::to_string(clash.faces) + " faces of the mesh clash like this)" : std::string();
+    if (clash.kind == Kind::repeated)
+        throw Error(name + ": " + names(clash.second) + " repeats " + names(clash.first) +
+                    ": the same four corners, so the two overlap" + others);
+    if (clash.kind == Kind::crowded)
+        throw Error(name + ": " + names(clash.first) + ", " + names(clash.second) + " and " + names(clash.third) +
+                    " share one face: at most two tetrahedra can, one on either side, so they overlap" + others);
+    // Folded: one of the two is inverted. Where the mesh lists its
+    // tetrahedra in one orientation, all but a few (a mesh listed all
+    // negatively is a convention, not an error), and exactly one of the two
+    // runs against it, that one is named; in a mesh of mixed orders the
+    // listing tells nothing, and both are.
+    std::size_t negative = 0;
+    for (const std::uint8_t n : listed_negative) negative += n;
+    const std::size_t count = listed_negative.size();
+    const std::size_t against = std::min(negative, count - negative);
+    const std::uint8_t convention = negative > count - negative ? 1 : 0;
+    const bool has_convention = 10 * against < count;
+    const bool first_against = listed_negative[clash.first] != convention;
+    const bool second_against = listed_negative[clash.second] != convention;
+    const char* side = "on the same side of the face they share, so the two overlap: the mesh is tangled";
+    if (has_convention && first_against != second_against) {
+        const std::size_t inverted = first_against ? clash.first : clash.second;
+        const std::size_t other = first_against ? clash.second : clash.first;
+        throw Error(name + ": " + names(inverted) + " is inverted: " + (convention ? "positively" : "negatively") +
+                    " oriented where the mesh's tetrahedra are " + (convention ? "negatively" : "positively") +
+                    " (all but " + std::to_string(against) + "), it lies with " + names(other) + " " + side + others);
     }
+    throw Error(name + ": " + names(clash.first) + " and " + names(clash.second) + " lie " + side + others);
+}
+
+void orient_tetrahedra(Domain& domain, const std::string& name) {
+    detail::orient_each(
+        domain.tets, [&domain](std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t d) { return signed_volume6(domain, a, b, c, d); },
+        name, {});
+}
+
+void check_tetrahedra(Domain& domain, const std::string& name, const std::vector<std::uint64_t>& numbers,
+                      const char* number_word) {
+    const detail::TetNames names{numbers.empty() ? nullptr : numbers.data(), numbers.size(), number_word};
+    const std::vector<std::uint8_t> listed_negative = detail::orient_each(
+        domain.tets, [&domain](std::int32_t a, std::int32_t b, std::int32_t c, std::int32_t d) { return signed_volume6(domain, a, b, c, d); },
+        name, names);
+    const detail::FaceClash clash = detail::face_pass(domain.tets, domain.node_count(), [](std::int32_t, std::int32_t, std::int32_t, std::size_t) {});
+    detail::refuse_clash(clash, listed_negative, name, names);
 }
 
 Domain domain_from_arrays(MeshArrays arrays, const Field* field, const std::string& name) {
@@ -74,7 +117,7 @@ Domain domain_from_arrays(MeshArrays arrays, const Field* field, const std::stri
     domain.interface.assign(n, 0);
     domain.tets = std::move(arrays.tets);
     // Extraction orients triangles from positively oriented tetrahedra.
-    orient_tetrahedra(domain, name);
+    check_tetrahedra(domain, name, arrays.tet_numbers, arrays.number_word);
     return domain;
 }
 

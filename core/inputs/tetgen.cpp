@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "table_file.hpp"
+#include "tet_faces.hpp"
 #include "tetiso/error.hpp"
 
 namespace tetiso {
@@ -92,6 +93,7 @@ Domain read_tetgen(const TetgenSource& source) {
     check_count(ele_file, tets, "tetrahedra");
     const int corners = ele_file.get<int>(1, "nodes per tetrahedron");
     if (corners != 4 && corners != 10) ele_file.fail("nodes per tetrahedron is " + std::to_string(corners) + ", not 4 or 10");
+    std::vector<std::uint8_t> listed_negative;
     for (std::int64_t t = 0; t < tets; ++t) {
         if (!ele_file.next())
             ele_file.fail_file("the header promises " + std::to_string(tets) + " tetrahedra, the file has " + std::to_string(t));
@@ -109,8 +111,13 @@ Domain read_tetgen(const TetgenSource& source) {
         const double volume = signed_volume6(domain, v[0], v[1], v[2], v[3]);
         if (volume == 0) ele_file.fail("tetrahedron " + std::to_string(t) + " has zero volume (its corners, as stored in float, are coplanar)");
         if (volume < 0) std::swap(v[2], v[3]);
+        listed_negative.push_back(volume < 0);
         domain.tets.insert(domain.tets.end(), v, v + 4);
     }
+    // Tetrahedra that overlap across a face (check_tetrahedra in mesh_file.hpp).
+    const detail::FaceClash clash =
+        detail::face_pass(domain.tets, n, [](std::int32_t, std::int32_t, std::int32_t, std::size_t) {});
+    detail::refuse_clash(clash, listed_negative, source.base.string() + ".ele", {});
     return domain;
 }
 

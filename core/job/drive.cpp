@@ -21,6 +21,10 @@ std::optional<JobResult> drive(const Job& job, Scheduler& scheduler, Transport& 
                 transport.send_task(action.worker, std::move(action.message));
                 sent = true;
                 break;
+            case SchedulerAction::Kind::send_batch:
+                transport.send_batch(action.worker, std::move(action.batch));
+                sent = true;
+                break;
             case SchedulerAction::Kind::lend_cores:
                 transport.lend_cores(action.worker, action.lender);
                 break;
@@ -56,6 +60,11 @@ std::optional<JobResult> drive(const Job& job, Scheduler& scheduler, Transport& 
             break;
         case WorkerEvent::Kind::result:
             scheduler.on_result(event->worker, std::move(event->result), transport.clock());
+            report_running(scheduler.running());
+            report_progress();
+            break;
+        case WorkerEvent::Kind::batch_result:
+            scheduler.on_batch_result(event->worker, std::move(event->batch.results), transport.clock());
             report_running(scheduler.running());
             report_progress();
             break;

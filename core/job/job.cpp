@@ -79,8 +79,11 @@ Job::Job(const JobConfig& config) : config_(config) {
     tree_ = task_tree(partition_->tree());
     reduce_options_ = config.reduce_options;
     if (config.max_error_spacings > 0) reduce_options_.max_error = config.max_error_spacings * partition_->spacing();
-    if (config.device == JobConfig::Device::gpu)
-        if (const GpuInfo info = gpu_info(config.gpu); !info.available) throw Error("--device gpu: " + info.description);
+    // Under MPI the node layout checks each node's GPUs, asking CUDA on one
+    // rank of each node rather than on all (node_layout.hpp).
+    if (config.device == JobConfig::Device::gpu && config.ranks.size <= 1)
+        if (const GpuInfo info = gpu_info(std::max(0, config.gpu)); !info.available)
+            throw Error("--device gpu: " + info.description);
 }
 
 Job::~Job() = default;
@@ -92,15 +95,17 @@ const Device& Job::gpu(int index) const {
 }
 
 void Job::prepare_gpu(int index) const {
-    // The paper's field on a lattice of 24^3 nodes in one domain: every
-    // kernel of a domain task runs, in a few milliseconds once loaded.
-    const LatticePartition one(24, 1, make_field("paper"));
+    // The paper's field on a lattice of 24^3 nodes in two domains, run as
+    // one batch, the way the driver's grants run: every kernel of a domain
+    // task runs, in a few milliseconds once loaded.
+    const LatticePartition two(24, 2, make_field("paper"));
     DomainTaskOptions options;
-    options.level = static_cast<float>(one.field().default_level());
+    options.level = static_cast<float>(two.field().default_level());
     options.device = gpu(index);
     options.reduce = reduce_options_;
     options.reduce->keep_samples = true;
-    run_domain_task(one, 0, options);
+    const std::vector<int> both{0, 1};
+    run_domain_tasks(two, both, options);
 }
 
 std::string Job::describe(int task) const {
@@ -109,39 +114,100 @@ std::string Job::describe(int task) const {
     return "seam of domains " + std::to_string(n.first) + "-" + std::to_string(n.first + n.count - 1);
 }
 
-Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& record,
-                   const TaskThreads& threads) const {
-    const TaskNode& n = node(task);
+namespace {
+
+// What a domain task's record says of its run.
+Piece record_domain(DomainTaskResult& done, int gpu_index, TaskRecord& record) {
+    static_cast<StageSeconds&>(record.stages) = done.seconds;
+    record.stages.gpu = gpu_index;
+    record.field_low = done.field_low;
+    record.field_high = done.field_high;
+    record.triangles_in = done.triangles_extracted;
+    record.triangles_out = done.piece.triangle_count();
+    record.samples_out = done.piece.sample_count();
+    return std::move(done.piece);
+}
+
+void start_record(const Job& job, int task, const TaskThreads& threads, TaskRecord& record) {
+    const TaskNode& n = job.node(task);
     record.task = task;
-    record.kind = kind(task);
+    record.kind = job.kind(task);
     record.first_domain = n.first;
     record.domain_count = n.count;
     record.threads = threads.count;
-    using clock = std::chrono::steady_clock;
+}
+
+} // namespace
+
+int Job::gpu_of(const TaskThreads& threads) const {
+    if (threads.gpu) return *threads.gpu;
+    return config_.device == JobConfig::Device::gpu ? std::max(0, config_.gpu) : -1;
+}
+
+DomainTaskOptions Job::domain_options(const TaskThreads& threads) const {
+    const int gpu_index = gpu_of(threads);
+    DomainTaskOptions options;
+    options.level = level_;
+    if (gpu_index >= 0) options.device = gpu(gpu_index);
+    options.threads = threads.count;
+    if (config_.reduce) {
+        options.reduce = reduce_options(threads);
+        options.reduce->keep_samples = true;
+    }
+    return options;
+}
+
+// The samples a piece of the job keeps for later seams: those near open
+// interfaces, timed as part of the reduction.
+void Job::keep_samples(DomainTaskResult& done) const {
+    if (!config_.reduce) return;
+    const auto start = std::chrono::steady_clock::now();
+    keep_samples_near_locked(done.piece, config_.sample_rings);
+    done.seconds.reduce += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::vector<Piece> Job::execute_batch(const std::vector<int>& tasks, std::vector<TaskRecord>& records,
+                                      const TaskThreads& threads) const {
+    std::vector<int> domains;
+    for (const int task : tasks) {
+        if (kind(task) != TaskKind::domain) throw Error("a batch holds domain tasks only, not " + describe(task));
+        domains.push_back(node(task).first);
+    }
+    std::vector<DomainTaskResult> done;
+    try {
+        done = run_domain_tasks(*partition_, domains, domain_options(threads));
+    } catch (const std::exception& batch_error) {
+        // Which task: the first that fails alone (the same inputs fail the
+        // same way); none, and the batch as a whole failed.
+        for (const int task : tasks) {
+            TaskRecord alone;
+            try {
+                execute(task, nullptr, nullptr, alone, threads);
+            } catch (const std::exception& e) {
+                throw BatchTaskError(task, e.what());
+            }
+        }
+        throw BatchTaskError(tasks.front(), "in a batch of " + std::to_string(tasks.size()) +
+                                                " domain tasks on a GPU: " + batch_error.what());
+    }
+    records.assign(tasks.size(), TaskRecord{});
+    std::vector<Piece> pieces;
+    for (std::size_t i = 0; i < tasks.size(); ++i) {
+        start_record(*this, tasks[i], threads, records[i]);
+        keep_samples(done[i]);
+        pieces.push_back(record_domain(done[i], gpu_of(threads), records[i]));
+    }
+    return pieces;
+}
+
+Piece Job::execute(int task, const Piece* left, const Piece* right, TaskRecord& record,
+                   const TaskThreads& threads) const {
+    const TaskNode& n = node(task);
+    start_record(*this, task, threads, record);
     if (n.count == 1) {
-        const int gpu_index = threads.gpu ? *threads.gpu : config_.device == JobConfig::Device::gpu ? config_.gpu : -1;
-        DomainTaskOptions options;
-        options.level = level_;
-        if (gpu_index >= 0) options.device = gpu(gpu_index);
-        options.threads = threads.count;
-        if (config_.reduce) {
-            options.reduce = reduce_options(threads);
-            options.reduce->keep_samples = true;
-        }
-        DomainTaskResult done = run_domain_task(*partition_, n.first, options);
-        if (config_.reduce) {
-            const auto start = clock::now();
-            keep_samples_near_locked(done.piece, config_.sample_rings);
-            done.seconds.reduce += std::chrono::duration<double>(clock::now() - start).count();
-        }
-        static_cast<StageSeconds&>(record.stages) = done.seconds;
-        record.stages.gpu = gpu_index;
-        record.field_low = done.field_low;
-        record.field_high = done.field_high;
-        record.triangles_in = done.triangles_extracted;
-        record.triangles_out = done.piece.triangle_count();
-        record.samples_out = done.piece.sample_count();
-        return std::move(done.piece);
+        DomainTaskResult done = run_domain_task(*partition_, n.first, domain_options(threads));
+        keep_samples(done);
+        return record_domain(done, gpu_of(threads), record);
     }
     if (!left || !right) throw Error("seam task " + std::to_string(task) + " lacks a piece");
     record.triangles_in = left->triangle_count() + right->triangle_count();

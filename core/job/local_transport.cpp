@@ -45,6 +45,27 @@ void LocalTransport::send_task(int worker, TaskMessage message) {
     events_.push_back(std::move(event));
 }
 
+void LocalTransport::send_batch(int worker, BatchMessage message) {
+    WorkerEvent event;
+    event.worker = worker;
+    TaskThreads threads{job_.config().threads, {}, message.gpu};
+    const double started = clock();
+    try {
+        std::vector<TaskRecord> records;
+        std::vector<Piece> pieces =
+            job_.execute_batch(std::vector<int>(message.tasks.begin(), message.tasks.end()), records, threads);
+        event.kind = WorkerEvent::Kind::batch_result;
+        event.batch = batch_result_message(records, clock() - started, threads.count, std::move(pieces));
+    } catch (const BatchTaskError& e) {
+        event.kind = WorkerEvent::Kind::failure;
+        event.failure = FailureMessage{e.task, e.what()};
+    } catch (const std::bad_alloc&) {
+        event.kind = WorkerEvent::Kind::failure;
+        event.failure = FailureMessage{message.tasks.empty() ? -1 : message.tasks.front(), "out of memory"};
+    }
+    events_.push_back(std::move(event));
+}
+
 std::optional<WorkerEvent> LocalTransport::receive(double) {
     if (events_.empty()) throw Error("the single-process job waits for a report that cannot come");
     WorkerEvent event = std::move(events_.front());
@@ -54,7 +75,7 @@ std::optional<WorkerEvent> LocalTransport::receive(double) {
 
 JobResult run_local(const Job& job, const Progress& progress) {
     SchedulerSetup setup;
-    if (job.config().device == JobConfig::Device::automatic) {
+    if (job.config().device != JobConfig::Device::cpu) {
         const std::vector<int> gpus = NodePlacement::usable_gpus(job.config(), gpu_count());
         setup.nodes = single_process_layout(gpus, gpus.empty() ? 0.0 : gpu_memory_mib(gpus.front()));
     }

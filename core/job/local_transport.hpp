@@ -2,7 +2,7 @@
 // each task where it is sent and reports it at the next receive(). With it
 // the single-process run is the scheduler of the MPI job with one worker and
 // no controller of its own: tasks in TaskQueue order, one at a time, placed
-// by the resource manager under --device auto.
+// by the resource manager under --device auto and gpu.
 #pragma once
 
 #include <chrono>
@@ -18,6 +18,7 @@ public:
     // otherwise it runs where the job's --device says).
     LocalTransport(const Job& job, bool placed);
     void send_task(int worker, TaskMessage message) override;
+    void send_batch(int worker, BatchMessage message) override;
     void lend_cores(int, int) override {}
     std::optional<WorkerEvent> receive(double deadline) override;
     double clock() const override;

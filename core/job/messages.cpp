@@ -4,11 +4,15 @@
 #include <string_view>
 
 #include "byte_buffer.hpp"
+#include "piece_bytes.hpp"
 #include "tetiso/error.hpp"
 
 namespace tetiso {
 namespace {
 
+// Reserving a message's pieces' bytes (detail::piece_byte_size) before
+// putting them keeps a large message from growing by doubling, which on the
+// root seam's worker held up to twice the surface's size at once.
 class Writer : public detail::ByteWriter<MessageBytes> {
 public:
     void reserve(std::size_t more) { bytes.reserve(bytes.size() + more); }
@@ -20,46 +24,6 @@ public:
         : ByteReader(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
                      [](const char*) { throw Error("truncated message between MPI ranks"); }) {}
 };
-
-// Bytes that put_piece(piece) appends: reserving them first keeps a large
-// message from growing by doubling, which on the root seam's worker held up
-// to twice the surface's size at once.
-std::size_t piece_size(const Piece& piece) {
-    const auto array = [](const auto& v) { return sizeof(std::uint64_t) + v.size() * sizeof(v[0]); };
-    return array(piece.x) + array(piece.y) + array(piece.z) + array(piece.key) + array(piece.flags) +
-           array(piece.triangles) + array(piece.domains) + array(piece.error) + array(piece.sample_xyz) +
-           array(piece.sample_triangle) + array(piece.sampled);
-}
-
-void put_piece(Writer& out, const Piece& piece) {
-    out.put_array(piece.x);
-    out.put_array(piece.y);
-    out.put_array(piece.z);
-    out.put_array(piece.key);
-    out.put_array(piece.flags);
-    out.put_array(piece.triangles);
-    out.put_array(piece.domains);
-    out.put_array(piece.error);
-    out.put_array(piece.sample_xyz);
-    out.put_array(piece.sample_triangle);
-    out.put_array(piece.sampled);
-}
-
-Piece get_piece(Reader& in) {
-    Piece piece;
-    piece.x = in.get_array<float>();
-    piece.y = in.get_array<float>();
-    piece.z = in.get_array<float>();
-    piece.key = in.get_array<EdgeKey>();
-    piece.flags = in.get_array<std::uint8_t>();
-    piece.triangles = in.get_array<std::int32_t>();
-    piece.domains = in.get_array<int>();
-    piece.error = in.get_array<float>();
-    piece.sample_xyz = in.get_array<float>();
-    piece.sample_triangle = in.get_array<std::int32_t>();
-    piece.sampled = in.get_array<std::uint8_t>();
-    return piece;
-}
 
 void put_string(Writer& out, const std::string& text) { out.put_array(std::vector<char>(text.begin(), text.end())); }
 
@@ -97,9 +61,9 @@ MessageBytes encode(const TaskMessage& message) {
     const bool seam = message.left && message.right;
     out.put<std::int32_t>(seam ? 2 : 0);
     if (seam) {
-        out.reserve(piece_size(*message.left) + piece_size(*message.right));
-        put_piece(out, *message.left);
-        put_piece(out, *message.right);
+        out.reserve(detail::piece_byte_size(*message.left) + detail::piece_byte_size(*message.right));
+        detail::put_piece(out, *message.left);
+        detail::put_piece(out, *message.right);
     }
     return std::move(out.bytes);
 }
@@ -110,14 +74,15 @@ TaskMessage decode_task(const MessageBytes& bytes) {
     message.task = in.get<std::int32_t>();
     message.gpu = in.get<std::int32_t>();
     if (in.get<std::int32_t>() == 2) {
-        message.left = get_piece(in);
-        message.right = get_piece(in);
+        message.left = detail::get_piece(in);
+        message.right = detail::get_piece(in);
     }
     return message;
 }
 
-MessageBytes encode(const ResultMessage& message) {
-    Writer out;
+namespace {
+
+void put_result(Writer& out, const ResultMessage& message) {
     const TaskRecord& r = message.record;
     out.put(r.task);
     out.put(message.seconds);
@@ -128,13 +93,11 @@ MessageBytes encode(const ResultMessage& message) {
     out.put(r.stages);
     out.put(r.field_low);
     out.put(r.field_high);
-    out.reserve(piece_size(message.piece));
-    put_piece(out, message.piece);
-    return std::move(out.bytes);
+    out.reserve(detail::piece_byte_size(message.piece));
+    detail::put_piece(out, message.piece);
 }
 
-ResultMessage decode_result(const MessageBytes& bytes) {
-    Reader in(bytes);
+ResultMessage get_result(Reader& in) {
     ResultMessage message;
     TaskRecord& r = message.record;
     r.task = in.get<std::int32_t>();
@@ -146,7 +109,53 @@ ResultMessage decode_result(const MessageBytes& bytes) {
     r.stages = in.get<TaskRecord::Stages>();
     r.field_low = in.get<float>();
     r.field_high = in.get<float>();
-    message.piece = get_piece(in);
+    message.piece = detail::get_piece(in);
+    return message;
+}
+
+} // namespace
+
+MessageBytes encode(const ResultMessage& message) {
+    Writer out;
+    put_result(out, message);
+    return std::move(out.bytes);
+}
+
+ResultMessage decode_result(const MessageBytes& bytes) {
+    Reader in(bytes);
+    return get_result(in);
+}
+
+MessageBytes encode(const BatchMessage& message) {
+    Writer out;
+    out.put(message.gpu);
+    out.put_array(message.tasks);
+    return std::move(out.bytes);
+}
+
+BatchMessage decode_batch(const MessageBytes& bytes) {
+    Reader in(bytes);
+    BatchMessage message;
+    message.gpu = in.get<std::int32_t>();
+    message.tasks = in.get_array<std::int32_t>();
+    return message;
+}
+
+MessageBytes encode(const BatchResultMessage& message) {
+    Writer out;
+    out.put(static_cast<std::uint64_t>(message.results.size()));
+    for (const ResultMessage& result : message.results) put_result(out, result);
+    return std::move(out.bytes);
+}
+
+BatchResultMessage decode_batch_result(const MessageBytes& bytes) {
+    Reader in(bytes);
+    BatchResultMessage message;
+    const auto count = in.get<std::uint64_t>();
+    // Each result takes more bytes than this; a count that no message of
+    // this length can hold is refused before anything is allocated.
+    if (count > bytes.size()) throw Error("truncated message between MPI ranks");
+    for (std::uint64_t i = 0; i < count; ++i) message.results.push_back(get_result(in));
     return message;
 }
 

@@ -41,7 +41,20 @@ struct ResultMessage {
     Piece piece;
 };
 
-// Worker -> controller: a task that threw.
+// Controller -> worker: run these domain tasks together on GPU `gpu` of the
+// worker's node (a GPU grant's batch, Job::execute_batch).
+struct BatchMessage {
+    std::int32_t gpu = -1;
+    std::vector<std::int32_t> tasks;
+};
+
+// Worker -> controller: a finished batch, one result per task in the
+// batch's order, each with its share of the batch's seconds.
+struct BatchResultMessage {
+    std::vector<ResultMessage> results;
+};
+
+// Worker -> controller: a task that threw (of a batch: the one that fails).
 struct FailureMessage {
     std::int32_t task = 0;
     std::string what;
@@ -66,6 +79,8 @@ struct HeartbeatMessage {
 MessageBytes encode(const ReadyMessage& message);
 MessageBytes encode(const TaskMessage& message);
 MessageBytes encode(const ResultMessage& message);
+MessageBytes encode(const BatchMessage& message);
+MessageBytes encode(const BatchResultMessage& message);
 MessageBytes encode(const FailureMessage& message);
 MessageBytes encode(const LendMessage& message);
 MessageBytes encode(const StopMessage& message);
@@ -75,6 +90,8 @@ MessageBytes encode(const HeartbeatMessage& message);
 ReadyMessage decode_ready(const MessageBytes& bytes);
 TaskMessage decode_task(const MessageBytes& bytes);
 ResultMessage decode_result(const MessageBytes& bytes);
+BatchMessage decode_batch(const MessageBytes& bytes);
+BatchResultMessage decode_batch_result(const MessageBytes& bytes);
 FailureMessage decode_failure(const MessageBytes& bytes);
 LendMessage decode_lend(const MessageBytes& bytes);
 StopMessage decode_stop(const MessageBytes& bytes);

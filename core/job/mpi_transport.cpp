@@ -83,6 +83,8 @@ void MpiTransport::send_task(int worker, TaskMessage message) {
     sends_.send(std::move(bytes), worker, kTask);
 }
 
+void MpiTransport::send_batch(int worker, BatchMessage message) { sends_.send(encode(message), worker, kBatch); }
+
 void MpiTransport::lend_cores(int borrower, int lender) {
     sends_.send(encode(LendMessage{worker_cores_[static_cast<std::size_t>(lender)]}), borrower, kLend);
 }
@@ -131,6 +133,10 @@ std::optional<WorkerEvent> MpiTransport::receive(double deadline) {
     case kResult:
         event.kind = WorkerEvent::Kind::result;
         event.result = decode_result(message);
+        break;
+    case kBatchResult:
+        event.kind = WorkerEvent::Kind::batch_result;
+        event.batch = decode_batch_result(message);
         break;
     case kFailure:
         event.kind = WorkerEvent::Kind::failure;

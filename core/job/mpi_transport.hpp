@@ -22,7 +22,18 @@
 namespace tetiso {
 
 // kStopped: a worker's answer to kStop, an empty message.
-enum MessageTag : int { kReady = 1, kTask = 2, kResult = 3, kFailure = 4, kStop = 5, kLend = 6, kHeartbeat = 7, kStopped = 8 };
+enum MessageTag : int {
+    kReady = 1,
+    kTask = 2,
+    kResult = 3,
+    kFailure = 4,
+    kStop = 5,
+    kLend = 6,
+    kHeartbeat = 7,
+    kStopped = 8,
+    kBatch = 9,
+    kBatchResult = 10,
+};
 
 // A wait's pause between polls: short at first, so that a message arriving
 // soon costs at most kShortPause of latency (tasks take 10^-2 to 1 s), and
@@ -87,6 +98,7 @@ public:
     // task_timeout: the deadlines' floor (0: none, and no heartbeat).
     MpiTransport(int ranks, double task_timeout);
     void send_task(int worker, TaskMessage message) override;
+    void send_batch(int worker, BatchMessage message) override;
     void lend_cores(int borrower, int lender) override;
     std::optional<WorkerEvent> receive(double deadline) override;
     void busy_for(double seconds) override;

@@ -102,6 +102,24 @@ private:
     Clock::time_point since_;
 };
 
+// A GPU grant's batch: its results in one message, or the task that failed.
+template <class Deliver>
+void run_batch(const Job& job, const BatchMessage& batch, Deliver& deliver) {
+    const auto started = Clock::now();
+    try {
+        std::vector<TaskRecord> records;
+        std::vector<Piece> pieces = job.execute_batch(std::vector<int>(batch.tasks.begin(), batch.tasks.end()), records,
+                                                      TaskThreads{job.config().threads, {}, batch.gpu});
+        const double seconds = std::chrono::duration<double>(Clock::now() - started).count();
+        deliver(encode(batch_result_message(records, seconds, job.config().threads, std::move(pieces))), kBatchResult);
+    } catch (const BatchTaskError& e) {
+        deliver(encode(FailureMessage{e.task, e.what()}), kFailure);
+    } catch (const std::exception& e) {
+        const std::string what = dynamic_cast<const std::bad_alloc*>(&e) ? "out of memory" : e.what();
+        deliver(encode(FailureMessage{batch.tasks.empty() ? -1 : batch.tasks.front(), what}), kFailure);
+    }
+}
+
 } // namespace
 
 void work(const Job& job, int driven_gpu) {
@@ -137,6 +155,10 @@ void work(const Job& job, int driven_gpu) {
             deliver(MessageBytes(), kStopped);
             if (decode_stop(message).failed) throw JobStopped();
             return;
+        }
+        if (status.MPI_TAG == kBatch) {
+            run_batch(job, decode_batch(message), deliver);
+            continue;
         }
         TaskMessage task = decode_task(message);
         // The pieces are decoded: the message's copy of them would only add

@@ -1,6 +1,7 @@
 // Which node each rank is on, its GPUs and their drivers (node_layout.hpp).
 #include "node_layout.hpp"
 
+#include <algorithm>
 #include <map>
 
 #include "tetiso/device.hpp"
@@ -31,17 +32,24 @@ NodeLayout node_layout(int rank, int ranks, const JobConfig& config) {
     MPI_Allreduce(&rank, &leader, 1, MPI_INT, MPI_MIN, local);
     MPI_Comm_rank(local, &local_rank);
     MPI_Comm_size(local, &local_size);
-    const int seen = gpu_count();
-    int count = 0;
-    MPI_Allreduce(&seen, &count, 1, MPI_INT, MPI_MIN, local);
-    const std::vector<int> usable = NodePlacement::usable_gpus(config, count);
-    const int seen_mib = usable.empty() ? 0 : static_cast<int>(gpu_memory_mib(usable.front()));
-    int mib = 0;
-    MPI_Allreduce(&seen_mib, &mib, 1, MPI_INT, MPI_MIN, local);
-    MPI_Comm_free(&local);
     // Ranks keep their order within the node (the split's key), and rank 0,
     // the lowest, is no worker.
     const int with_controller = leader == 0 ? 1 : 0;
+    // One rank of the node asks CUDA what it has, the node's first worker
+    // (its first GPU's driver, which needs CUDA anyway): starting CUDA's
+    // driver in every rank at once took seconds that grew with the GPUs,
+    // all before the first task.
+    const int asking = std::min(with_controller, local_size - 1);
+    int found[2] = {0, 0}; // GPUs, the first usable one's MiB
+    if (local_rank == asking) {
+        found[0] = gpu_count();
+        const std::vector<int> usable = NodePlacement::usable_gpus(config, found[0]);
+        found[1] = usable.empty() ? 0 : static_cast<int>(gpu_memory_mib(usable.front()));
+    }
+    MPI_Bcast(found, 2, MPI_INT, asking, local);
+    MPI_Comm_free(&local);
+    const int count = found[0], mib = found[1];
+    const std::vector<int> usable = NodePlacement::usable_gpus(config, count);
     const int worker_index = local_rank - with_controller;
     const int drivers = driver_count(local_size - with_controller, static_cast<int>(usable.size()));
     NodeLayout layout;

@@ -29,9 +29,9 @@ inline int driver_count(int workers, int gpus) { return workers >= 2 ? (gpus < w
 // The layout over MPI_COMM_WORLD: ranks that share memory
 // (MPI_COMM_TYPE_SHARED) are a node, named by its lowest rank, and its
 // lowest worker ranks drive its GPUs. A node's GPUs are counted, and the
-// first usable one's memory taken, on every rank there; the smallest answer
-// stands, in case ranks see different devices. Every rank learns the GPU it
-// drives; rank 0 learns the whole layout. Collective.
+// first usable one's memory taken, by its first worker alone, which tells
+// the others. Every rank learns the GPU it drives; rank 0 learns the whole
+// layout. Collective.
 NodeLayout node_layout(int rank, int ranks, const JobConfig& config);
 
 // One process alone: a node with one worker, rank 0, driving none of the

@@ -31,7 +31,10 @@ NodePlacement::NodePlacement(const Job& job, int cpu_processes, const std::vecto
       domain_tets_(std::max(1.0, static_cast<double>(job.partition().tet_count()) / job.partition().domain_count())),
       task_mib_(domain_tets_ * kGpuBytesPerTet / (1 << 20) + kGpuTaskMarginMiB),
       usable_mib_(gpu_mib * kGpuUsableShare - kGpuContextMiB),
-      domains_on_cpu_(domains_on_cpu) {}
+      domains_on_cpu_(domains_on_cpu),
+      batch_limit_(static_cast<int>(std::clamp(std::floor(usable_mib_ / task_mib_), 1.0,
+                                               static_cast<double>(job.config().gpu_batch > 0 ? job.config().gpu_batch
+                                                                                              : kDefaultGpuBatch)))) {}
 
 void NodePlacement::finish(const Grant& grant, double seconds, TaskRecord& record) {
     const double transfer = record.stages.upload + record.stages.download;
@@ -39,14 +42,21 @@ void NodePlacement::finish(const Grant& grant, double seconds, TaskRecord& recor
     record.predicted_seconds = grant.predicted_seconds;
 }
 
+void NodePlacement::finish(const Grant& grant, double seconds, std::vector<TaskRecord*> records) {
+    double transfer = 0;
+    for (const TaskRecord* r : records) transfer += r->stages.upload + r->stages.download;
+    manager.finish(grant.ticket, std::max(0.0, seconds - transfer), transfer);
+    for (TaskRecord* r : records) r->predicted_seconds = grant.predicted_seconds / static_cast<double>(records.size());
+}
+
 std::vector<int> NodePlacement::usable_gpus(const JobConfig& config, int count) {
     std::vector<int> gpus;
     for (int g = 0; g < count; ++g)
-        if (config.device != JobConfig::Device::gpu || g == config.gpu) gpus.push_back(g);
+        if (config.device != JobConfig::Device::gpu || config.gpu < 0 || g == config.gpu) gpus.push_back(g);
     return gpus;
 }
 
-ResourceRequest NodePlacement::request(int task, const Piece* left, const Piece* right) const {
+ResourceRequest NodePlacement::request(int task, const Piece* left, const Piece* right, int most_in_batch) const {
     ResourceRequest r;
     r.kind = static_cast<int>(job_.kind(task));
     r.units.assign(manager.devices().size(), 0.0);
@@ -61,6 +71,8 @@ ResourceRequest NodePlacement::request(int task, const Piece* left, const Piece*
     if (!domains_on_cpu_) r.units[0] = 0;
     const bool fits = task_mib_ <= usable_mib_;
     for (std::size_t d = 1; d < r.units.size(); ++d) r.units[d] = fits ? 1 : 0;
+    r.batch.assign(r.units.size(), std::clamp(most_in_batch, 1, batch_limit_));
+    r.batch[0] = 1; // the CPU runs one task per process
     if (!domains_on_cpu_ && (!fits || r.units.size() < 2))
         throw Error("--device gpu: " + job_.describe(task) + " needs about " + std::to_string(std::lround(task_mib_)) +
                     " MiB of GPU memory, more than the " + std::to_string(std::lround(std::max(0.0, usable_mib_))) +

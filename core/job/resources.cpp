@@ -123,24 +123,55 @@ double ResourceManager::admission_time(int device, double units, double seconds,
     return candidates.back(); // after every booking the device is empty, and units <= capacity
 }
 
+Grant ResourceManager::candidate(const ResourceRequest& request, int device, int count, double now) const {
+    ResourceRequest whole = request;
+    whole.size = request.size * count;
+    Grant g;
+    g.device = device;
+    g.count = count;
+    const PerformanceModel* m = model(request.kind, device);
+    const bool fitted = m && m->sizes() >= 2 && m->predict(whole.size);
+    g.predicted_seconds = count == 1 || fitted ? expected_seconds(whole, device, now)
+                                               : count * expected_seconds(request, device, now);
+    g.start = admission_time(device, request.units[static_cast<std::size_t>(device)], g.predicted_seconds, now);
+    return g;
+}
+
 Grant ResourceManager::request(const ResourceRequest& request, double now) {
+    const auto most = [&](std::size_t d) { return d < request.batch.size() ? std::max(1, request.batch[d]) : 1; };
     Grant best;
     double best_end = std::numeric_limits<double>::infinity();
+    // Where the task alone would end first, and where on a device that takes
+    // one task at a time.
+    double alone_end = std::numeric_limits<double>::infinity();
     for (std::size_t d = 0; d < devices_.size(); ++d) {
         const double units = d < request.units.size() ? request.units[d] : 0;
         if (!(units > 0) || units > devices_[d].capacity) continue;
-        const int device = static_cast<int>(d);
-        const double seconds = expected_seconds(request, device, now);
-        const double start = admission_time(device, units, seconds, now);
+        const Grant g = candidate(request, static_cast<int>(d), 1, now);
+        const double end = g.start + g.predicted_seconds;
+        if (most(d) == 1) alone_end = std::min(alone_end, end);
         // Ties go to the lower device index: the CPU first, where it is listed first.
-        if (start + seconds < best_end) {
-            best_end = start + seconds;
-            best.device = device;
-            best.start = start;
-            best.predicted_seconds = seconds;
+        if (end < best_end) {
+            best_end = end;
+            best = g;
         }
     }
     if (best.device < 0) throw Error("no device of the node can hold a task of size " + std::to_string(request.size));
+    // The device chosen takes a batch: as many tasks as end no later than
+    // the task would alone elsewhere (all it may take where nowhere else can).
+    // Where the task could run alone elsewhere, a device whose model of it
+    // is not calibrated yet takes one: its guess could be far off, and one
+    // task teaches it the most.
+    const PerformanceModel* known = model(request.kind, best.device);
+    const bool calibrated = known && known->samples() >= PerformanceModel::kMinSamples;
+    const int most_here = std::isfinite(alone_end) && !calibrated ? 1 : most(static_cast<std::size_t>(best.device));
+    for (int count = most_here; count > 1; --count) {
+        const Grant g = candidate(request, best.device, count, now);
+        if (g.start + g.predicted_seconds <= alone_end) {
+            best = g;
+            break;
+        }
+    }
     best.ticket = next_ticket_++;
     Booking booking;
     booking.device = best.device;
@@ -148,6 +179,7 @@ Grant ResourceManager::request(const ResourceRequest& request, double now) {
     booking.start = best.start;
     booking.end = best.start + best.predicted_seconds;
     booking.request = request;
+    booking.request.size = request.size * best.count;
     bookings_[best.ticket] = booking;
     last_start_[static_cast<std::size_t>(best.device)] = best.start;
     return best;

@@ -46,7 +46,9 @@ JobResult control(const Job& job, int ranks, const Progress& progress, const std
 
     DriveHooks hooks;
     hooks.progress = progress;
-    hooks.on_running = [&](const std::map<int, int>& running) { in_flight.update(job, running, ranks); };
+    hooks.on_running = [&](const std::map<int, int>& running) {
+        in_flight.update(job, running, ranks, scheduler.batches());
+    };
     // A seam run here runs on the cores of rank 0 and of every worker, which
     // are all idle then and wait without spinning: one thread per rank's
     // share, on the union of the ranks' bindings. Threads do not change the
@@ -125,6 +127,22 @@ std::optional<JobResult> run_mpi(const Job& job, const Progress& progress) {
     }
     std::optional<NodeLayout> nodes;
     if (job.config().device != JobConfig::Device::cpu) nodes = node_layout(rank, ranks, job.config());
+    if (nodes && job.config().device == JobConfig::Device::gpu) {
+        // A node with workers but no GPU its tasks may use, by its lowest rank.
+        int without = -1;
+        if (rank == 0)
+            for (int r = ranks - 1; r >= 1; --r) {
+                const auto node = static_cast<std::size_t>(nodes->node_of[static_cast<std::size_t>(r)]);
+                if (nodes->gpus[node].empty()) without = r;
+            }
+        MPI_Bcast(&without, 1, MPI_INT, 0, MPI_COMM_WORLD);
+        if (without >= 0) {
+            if (rank != 0) throw JobStopped();
+            const int gpu = job.config().gpu;
+            throw Error("--device gpu: the node of rank " + std::to_string(without) + " has no CUDA device" +
+                        (gpu >= 0 ? " " + std::to_string(gpu) : std::string()) + " this build can use");
+        }
+    }
     if (rank != 0) {
         work(job, nodes ? nodes->my_gpu : -1);
         return std::nullopt;

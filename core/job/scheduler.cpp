@@ -17,6 +17,21 @@ ResultMessage result_message(const TaskRecord& record, double seconds, int threa
     return result;
 }
 
+BatchResultMessage batch_result_message(const std::vector<TaskRecord>& records, double seconds, int threads,
+                                        std::vector<Piece> pieces) {
+    const auto staged = [](const TaskRecord& r) {
+        return r.stages.generate + r.stages.upload + r.stages.extract + r.stages.reduce + r.stages.download;
+    };
+    double sum = 0;
+    for (const TaskRecord& r : records) sum += staged(r);
+    BatchResultMessage batch;
+    for (std::size_t i = 0; i < records.size(); ++i) {
+        const double share = sum > 0 ? staged(records[i]) / sum : 1.0 / static_cast<double>(records.size());
+        batch.results.push_back(result_message(records[i], seconds * share, threads, std::move(pieces[i])));
+    }
+    return batch;
+}
+
 Scheduler::Scheduler(const Job& job, SchedulerSetup setup)
     : job_(job), setup_(std::move(setup)), queue_(job), pieces_(static_cast<std::size_t>(job.task_count())),
       cores_known_(static_cast<std::size_t>(setup_.ranks), false), lent_to_(static_cast<std::size_t>(setup_.ranks), -1),
@@ -34,9 +49,11 @@ Scheduler::Scheduler(const Job& job, SchedulerSetup setup)
         ++drivers[static_cast<std::size_t>(node)];
         driver_of_gpu_[{node, gpu}] = r;
     }
-    for (std::size_t node = 0; node < nodes.gpus.size(); ++node)
+    for (std::size_t node = 0; node < nodes.gpus.size(); ++node) {
         placements_.emplace_back(job, nodes.workers[node] - drivers[node], nodes.gpus[node], nodes.gpu_mib[node],
                                  domains_on_cpu);
+        gpu_slots_ += static_cast<int>(nodes.gpus[node].size());
+    }
 }
 
 std::vector<SchedulerAction> Scheduler::decide(double now) {
@@ -104,16 +121,34 @@ void Scheduler::on_ready(int worker, bool cores_known, double) {
     idle_.push_back(worker);
 }
 
-void Scheduler::on_result(int rank, ResultMessage result, double now) {
-    const int task = result.record.task;
-    const TaskNode& n = job_.node(task);
+// A finished task's record: what its worker measured, and where and when
+// (on this clock) it ran.
+TaskRecord Scheduler::completed(const ResultMessage& result, int rank, double start, double end) const {
+    const TaskNode& n = job_.node(result.record.task);
     TaskRecord record = result.record;
-    record.kind = job_.kind(task);
+    record.kind = job_.kind(result.record.task);
     record.first_domain = n.first;
     record.domain_count = n.count;
     record.rank = rank;
-    record.end = now;
-    record.start = std::max(0.0, now - result.seconds);
+    record.start = start;
+    record.end = end;
+    return record;
+}
+
+// A finished task's piece kept for its parent, its time learnt, its parent
+// readied.
+void Scheduler::keep_result(int task, Piece made, double seconds, TaskRecord record) {
+    learn(task, size_sent_[static_cast<std::size_t>(task)], seconds);
+    piece(task) = std::move(made);
+    result_.tasks.push_back(record);
+    queue_.complete(task);
+    ++done_;
+}
+
+void Scheduler::on_result(int rank, ResultMessage result, double now) {
+    const int task = result.record.task;
+    const TaskNode& n = job_.node(task);
+    TaskRecord record = completed(result, rank, std::max(0.0, now - result.seconds), now);
     const bool here = rank == 0 && task == here_;
     if (here) {
         here_ = -1;
@@ -127,14 +162,51 @@ void Scheduler::on_result(int rank, ResultMessage result, double now) {
             placed_.erase(it);
         }
         running_.erase(rank);
+        batches_.erase(rank);
         end_lends_to(rank);
     }
-    learn(task, size_sent_[static_cast<std::size_t>(task)], result.seconds);
-    piece(task) = std::move(result.piece);
-    result_.tasks.push_back(record);
-    queue_.complete(task);
-    ++done_;
+    keep_result(task, std::move(result.piece), result.seconds, record);
     if (!here) idle_.push_back(rank);
+}
+
+// The batch's records lie end to end within its span, each as long as its
+// share of the batch's seconds: a device's busy time is the batch's, and no
+// rank seems to hold two tasks at once.
+void Scheduler::on_batch_result(int rank, std::vector<ResultMessage> results, double now) {
+    const auto held = batches_.find(rank);
+    const std::vector<int> batch = held != batches_.end() ? held->second : std::vector<int>{};
+    bool matches = batch.size() == results.size();
+    for (std::size_t i = 0; matches && i < batch.size(); ++i) matches = results[i].record.task == batch[i];
+    if (!matches) {
+        const auto held_task = running_.find(rank);
+        on_failure(rank, !batch.empty() ? batch.front() : held_task != running_.end() ? held_task->second : -1,
+                   "answered a batch of " + std::to_string(batch.size()) + " tasks with other results", now);
+        return;
+    }
+    double total = 0;
+    for (const ResultMessage& r : results) total += r.seconds;
+    std::vector<TaskRecord> records;
+    double start = std::max(0.0, now - total);
+    for (const ResultMessage& r : results) {
+        records.push_back(completed(r, rank, start, std::min(now, start + r.seconds)));
+        start = records.back().end;
+    }
+    if (const auto it = placed_.find(rank); it != placed_.end()) {
+        const Placed& p = it->second;
+        std::vector<TaskRecord*> shares;
+        for (TaskRecord& r : records) {
+            r.wait_seconds = p.sent_at - p.asked_at;
+            shares.push_back(&r);
+        }
+        placements_[static_cast<std::size_t>(p.node)].finish(p.grant, total, shares);
+        placed_.erase(it);
+    }
+    running_.erase(rank);
+    batches_.erase(rank);
+    end_lends_to(rank);
+    for (std::size_t i = 0; i < results.size(); ++i)
+        keep_result(batch[i], std::move(results[i].piece), results[i].seconds, records[i]);
+    idle_.push_back(rank);
 }
 
 void Scheduler::on_failure(int rank, int task, const std::string& what, double) {
@@ -148,6 +220,7 @@ void Scheduler::on_failure(int rank, int task, const std::string& what, double) 
         placed_.erase(it);
     }
     running_.erase(rank);
+    batches_.erase(rank);
     end_lends_to(rank);
     idle_.push_back(rank);
 }
@@ -155,7 +228,7 @@ void Scheduler::on_failure(int rank, int task, const std::string& what, double) 
 void Scheduler::on_time(double now) {
     if (failure_ && failure_->unresponsive) return;
     for (const auto& [worker, task] : running_) {
-        const double allowed = allowance(task);
+        const double allowed = allowance_of(worker);
         if (now < dispatched_at_[worker] + allowed) continue;
         failure_ = SchedulerFailure{task, worker, "no answer within its deadline", true, allowed};
         return;
@@ -168,7 +241,7 @@ void Scheduler::on_silent(int worker) {
 
 double Scheduler::next_deadline() const {
     double next = std::numeric_limits<double>::infinity();
-    for (const auto& [worker, task] : running_) next = std::min(next, dispatched_at_.at(worker) + allowance(task));
+    for (const auto& [worker, task] : running_) next = std::min(next, dispatched_at_.at(worker) + allowance_of(worker));
     return next;
 }
 
@@ -194,6 +267,15 @@ double Scheduler::predicted_seconds(int task) const {
 
 double Scheduler::allowance(int task) const {
     const double predicted = predicted_seconds(task);
+    if (setup_.task_timeout <= 0 || predicted <= 0) return std::numeric_limits<double>::infinity();
+    return std::max(setup_.task_timeout, kDeadlineFactor * predicted);
+}
+
+double Scheduler::allowance_of(int worker) const {
+    const auto batch = batches_.find(worker);
+    if (batch == batches_.end()) return allowance(running_.at(worker));
+    double predicted = 0;
+    for (const int task : batch->second) predicted += predicted_seconds(task);
     if (setup_.task_timeout <= 0 || predicted <= 0) return std::numeric_limits<double>::infinity();
     return std::max(setup_.task_timeout, kDeadlineFactor * predicted);
 }
@@ -293,12 +375,23 @@ void Scheduler::place(int node, double now) {
     Placed p;
     p.task = task;
     p.node = node;
+    // A GPU's batch takes no more than half the GPUs' share of the domains
+    // waiting (this one and those ready behind it: after a domain the queue
+    // holds only domains): each GPU gets some to the end, and pieces keep
+    // coming back for the seams, the batches halving as the queue empties.
+    int most_in_batch = 1;
+    if (job_.kind(task) == TaskKind::domain && gpu_slots_ > 0) {
+        const auto waiting = static_cast<int>(1 + queue_.ready_count());
+        most_in_batch = (waiting + 2 * gpu_slots_ - 1) / (2 * gpu_slots_);
+    }
     try {
-        p.grant = placement.manager.request(placement.request(task, left, right), now);
+        p.grant = placement.manager.request(placement.request(task, left, right, most_in_batch), now);
     } catch (const Error& e) {
         fail(task, 0, e.what());
         return;
     }
+    p.tasks = {task};
+    while (static_cast<int>(p.tasks.size()) < p.grant.count && queue_.has_ready()) p.tasks.push_back(queue_.pop());
     p.asked_at = now;
     waiting_.push_back(p);
 }
@@ -332,7 +425,10 @@ void Scheduler::start_granted(std::vector<SchedulerAction>& actions, double now)
         p.sent_at = now;
         idle_.erase(std::find(idle_.begin(), idle_.end(), worker));
         placed_[worker] = p;
-        send_task(actions, worker, p.task, placement.gpu_of(p.grant.device), now);
+        if (p.tasks.size() > 1)
+            send_batch(actions, worker, p.tasks, placement.gpu_of(p.grant.device), now);
+        else
+            send_task(actions, worker, p.task, placement.gpu_of(p.grant.device), now);
         it = waiting_.erase(it);
     }
 }
@@ -362,6 +458,20 @@ void Scheduler::send_task(std::vector<SchedulerAction>& actions, int worker, int
         piece(n.right).reset();
     }
     running_[worker] = task;
+    dispatched_at_[worker] = now;
+    actions.push_back(std::move(send));
+}
+
+void Scheduler::send_batch(std::vector<SchedulerAction>& actions, int worker, const std::vector<int>& tasks, int gpu,
+                           double now) {
+    SchedulerAction send;
+    send.kind = SchedulerAction::Kind::send_batch;
+    send.worker = worker;
+    send.task = tasks.front();
+    send.batch.gpu = gpu;
+    send.batch.tasks.assign(tasks.begin(), tasks.end());
+    running_[worker] = tasks.front();
+    batches_[worker] = tasks;
     dispatched_at_[worker] = now;
     actions.push_back(std::move(send));
 }

@@ -13,7 +13,9 @@
 // whichever idle worker has its cores (an idle worker that lent them out
 // only when there is no other); under auto or gpu a node is asked for a
 // task once one of its processes is idle and not promised, and the task
-// waits for its grant. A controller that is not a worker runs a seam itself
+// waits for its grant. A grant on a GPU takes the next domain tasks of the
+// queue with it as one batch (placement.hpp says how many), sent to the
+// GPU's driver in one message and answered with one result per task. A controller that is not a worker runs a seam itself
 // when it is the only task left to run (the root, and in practice every
 // seam after the last domain). Once no task is ready, idle workers lend
 // their cores to running tasks. A task that fails stops the handing out;
@@ -41,6 +43,7 @@ namespace tetiso {
 struct SchedulerAction {
     enum class Kind {
         send_task,  // message.task to `worker`, with the pieces it needs
+        send_batch, // batch: several domain tasks to `worker`, a GPU's driver (or a lone worker)
         lend_cores, // `lender`'s cores to `worker`, whose task takes them between reduction rounds
         run_here,   // the controller runs `task` itself (inputs()), then reports on_result or on_failure as rank 0
     };
@@ -49,6 +52,7 @@ struct SchedulerAction {
     int lender = -1;
     int task = -1;
     TaskMessage message;
+    BatchMessage batch;
 };
 
 struct SchedulerSetup {
@@ -75,6 +79,10 @@ struct SchedulerFailure {
 // A finished task's record as a result message: what a worker sends back,
 // or the controller reports of a task it ran.
 ResultMessage result_message(const TaskRecord& record, double seconds, int threads, Piece piece);
+// A finished batch's results: `seconds`, the batch's time on the worker,
+// shared out among its tasks in proportion to their stages' seconds.
+BatchResultMessage batch_result_message(const std::vector<TaskRecord>& records, double seconds, int threads,
+                                        std::vector<Piece> pieces);
 
 class Scheduler {
 public:
@@ -91,6 +99,8 @@ public:
     // only when it has nothing to do).
     void on_ready(int worker, bool cores_known, double now);
     void on_result(int rank, ResultMessage result, double now);
+    // A batch's results, in the batch's order.
+    void on_batch_result(int rank, std::vector<ResultMessage> results, double now);
     void on_failure(int rank, int task, const std::string& what, double now);
     // Time passed: a task past its deadline fails the job as unresponsive.
     void on_time(double now);
@@ -104,23 +114,30 @@ public:
     // predictions now: infinity before any task has ended (nothing says yet
     // how long tasks take) or without a floor.
     double allowance(int task) const;
+    // The same for what `worker` holds: its task, or its batch's tasks together.
+    double allowance_of(int worker) const;
 
     // Nothing runs, and the job either finished or failed.
     bool done() const;
     const std::optional<SchedulerFailure>& failure() const { return failure_; }
     int tasks_done() const { return done_; }
     bool places_tasks() const { return !placements_.empty(); }
-    // rank -> task it holds (a task the controller runs is not among them).
+    // rank -> task it holds, the first of its batch (a task the controller
+    // runs is not among them).
     const std::map<int, int>& running() const { return running_; }
+    // rank -> the batch it runs, where it runs one.
+    const std::map<int, std::vector<int>>& batches() const { return batches_; }
     // The pieces a task run here takes (null for a domain task).
     const Piece* input(int task, bool right) const;
     // The finished job (done(), no failure): the surface and the records.
     JobResult take_result(double now);
 
 private:
-    // A task's grant, from its request to its result.
+    // A task's grant, from its request to its result; a GPU's grant may
+    // carry a batch, `tasks` (the first is `task`).
     struct Placed {
         int task = 0, node = 0;
+        std::vector<int> tasks;
         Grant grant;
         double asked_at = 0, sent_at = 0;
     };
@@ -141,6 +158,10 @@ private:
     void start_granted(std::vector<SchedulerAction>& actions, double now);
     void cancel_waiting();
     void send_task(std::vector<SchedulerAction>& actions, int worker, int task, int gpu, double now);
+    void send_batch(std::vector<SchedulerAction>& actions, int worker, const std::vector<int>& tasks, int gpu,
+                    double now);
+    TaskRecord completed(const ResultMessage& result, int rank, double start, double end) const;
+    void keep_result(int task, Piece piece, double seconds, TaskRecord record);
     double predicted_seconds(int task) const;
     double task_size(int task) const;
     void learn(int task, double size, double seconds);
@@ -151,6 +172,7 @@ private:
     std::vector<std::optional<Piece>> pieces_; // by task, while its parent has not taken it
     std::deque<int> idle_;
     std::map<int, int> running_; // worker -> task
+    std::map<int, std::vector<int>> batches_; // worker -> the batch it runs, where it runs one
     JobResult result_;
     std::optional<SchedulerFailure> failure_;
     int done_ = 0;
@@ -172,6 +194,7 @@ private:
     std::deque<NodePlacement> placements_;              // by node
     std::map<int, Placed> placed_;                      // worker -> the grant of the task it runs
     std::deque<Placed> waiting_;                        // grants not started yet, in the order asked
+    int gpu_slots_ = 0;                                 // GPUs the job places tasks on, on every node
 };
 
 } // namespace tetiso

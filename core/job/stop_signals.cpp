@@ -27,13 +27,17 @@ std::size_t TasksInFlight::index_of(int signal) {
     return static_cast<std::size_t>(std::find(std::begin(kSignals), std::end(kSignals), signal) - std::begin(kSignals));
 }
 
-void TasksInFlight::update(const Job& job, const std::map<int, int>& running, int ranks) {
+void TasksInFlight::update(const Job& job, const std::map<int, int>& running, int ranks,
+                           const std::map<int, std::vector<int>>& batches) {
     std::string held;
     for (int rank = 0; rank < ranks; ++rank) {
         const auto it = running.find(rank);
         if (rank == 0 && it == running.end()) continue; // rank 0 is the one speaking
+        const auto batch = batches.find(rank);
+        const std::string more = batch == batches.end() || batch->second.size() < 2 ? std::string()
+                                 : " and " + std::to_string(batch->second.size() - 1) + " more of its batch";
         held += std::string(held.empty() ? "" : ", ") + "rank " + std::to_string(rank) +
-                (it == running.end() ? " held no task" : " held task '" + job.describe(it->second) + "'");
+                (it == running.end() ? " held no task" : " held task '" + job.describe(it->second) + "'" + more);
     }
     set(held);
 }

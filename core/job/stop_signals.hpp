@@ -14,6 +14,7 @@
 #include <iterator>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "tetiso/schedule.hpp"
 
@@ -26,8 +27,10 @@ public:
     TasksInFlight(const TasksInFlight&) = delete;
     TasksInFlight& operator=(const TasksInFlight&) = delete;
 
-    // running: rank -> the task it holds, of `ranks` ranks.
-    void update(const Job& job, const std::map<int, int>& running, int ranks);
+    // running: rank -> the task it holds, of `ranks` ranks; batches: rank
+    // -> the batch it runs, where it runs one (its first task is running's).
+    void update(const Job& job, const std::map<int, int>& running, int ranks,
+                const std::map<int, std::vector<int>>& batches = {});
     // The signals' previous handlers back: for a job that ends itself by
     // other means (MPI_Abort, having said why).
     void disarm();

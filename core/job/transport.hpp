@@ -17,10 +17,11 @@ namespace tetiso {
 
 // A worker's report.
 struct WorkerEvent {
-    enum class Kind { ready, result, failure } kind = Kind::ready;
+    enum class Kind { ready, result, batch_result, failure } kind = Kind::ready;
     int worker = -1;
     bool cores_known = false; // ready: the worker named its cores
     ResultMessage result;
+    BatchResultMessage batch;
     FailureMessage failure;
 };
 
@@ -28,6 +29,7 @@ class Transport {
 public:
     virtual ~Transport() = default;
     virtual void send_task(int worker, TaskMessage message) = 0;
+    virtual void send_batch(int worker, BatchMessage message) = 0;
     virtual void lend_cores(int borrower, int lender) = 0;
     // The next report, waiting at most until `deadline` (seconds on the
     // controller's clock, clock()); none when it passed first.

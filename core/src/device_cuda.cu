@@ -4,7 +4,10 @@
 // with the device waited for at every stage boundary.
 #include <cuda_runtime.h>
 
+#include <chrono>
+#include <functional>
 #include <string>
+#include <vector>
 
 #include "device_cuda.cuh"
 #include "device_entry.hpp"
@@ -113,6 +116,84 @@ Piece reduce(Device::State& g, const Piece& piece, const ReduceOptions& options,
     Piece out = g.reduce(piece, options, report);
     add(seconds, g.timings);
     return out;
+}
+
+std::vector<Piece> reduce_batch(Device::State& g, const std::vector<Piece>& pieces, const ReduceOptions& options,
+                                ReduceReport* report, StageSeconds* seconds) {
+    g.timings = {};
+    std::vector<Piece> out = g.reduce_batch(pieces, options, report);
+    add(seconds, g.timings);
+    return out;
+}
+
+namespace {
+
+// extract_surface(i): domain i's surface on the device, its extraction's
+// seconds in g.timings.
+template <class ExtractSurface>
+std::vector<BatchTask> extract_batch_then(Device::State& g, std::size_t count, ExtractSurface extract_surface,
+                                                 const ReduceOptions& reduce, std::size_t batch_triangles) {
+    std::vector<BatchTask> results(count);
+    std::size_t first = 0; // the batch's first domain
+    const auto reduce_batch = [&](std::size_t end) {
+        g.timings = {};
+        std::vector<Piece> pieces = g.reduce_batch(reduce, nullptr);
+        // The batch's reduction and download, shared out by raw triangles.
+        std::size_t total = 0;
+        for (std::size_t i = first; i < end; ++i) total += results[i].triangles_extracted;
+        for (std::size_t i = first; i < end; ++i) {
+            BatchTask& r = results[i];
+            const double share = total > 0 ? static_cast<double>(r.triangles_extracted) / static_cast<double>(total)
+                                            : 1.0 / static_cast<double>(end - first);
+            r.seconds.reduce += share * g.timings.reduce;
+            r.seconds.download += share * g.timings.download;
+            r.piece = std::move(pieces[i - first]);
+        }
+        first = end;
+        g.begin_batch();
+    };
+    g.begin_batch();
+    for (std::size_t i = 0; i < count; ++i) {
+        g.timings = {};
+        const DeviceSurface surface = extract_surface(i);
+        results[i].seconds += g.timings;
+        results[i].triangles_extracted = static_cast<std::size_t>(surface.triangle_count);
+        // The surface stays in the extraction's buffers while the batch
+        // before it is reduced.
+        const auto held = static_cast<std::size_t>(g.reduction.s.nt);
+        if (batch_triangles > 0 && i > first && held + results[i].triangles_extracted > batch_triangles)
+            reduce_batch(i);
+        g.append_to_batch(surface);
+    }
+    if (first < count) reduce_batch(count);
+    return results;
+}
+
+} // namespace
+
+std::vector<BatchTask> extract_batch(Device::State& g, const Decomposition& decomposition,
+                                            const std::vector<int>& domains, const Field& field, float level,
+                                            const ReduceOptions& reduce, std::size_t batch_triangles) {
+    return extract_batch_then(
+        g, domains.size(), [&](std::size_t i) { return g.extract(decomposition, domains[i], field, level); }, reduce,
+        batch_triangles);
+}
+
+std::vector<BatchTask> extract_batch(Device::State& g, std::size_t count,
+                                            const std::function<Domain(std::size_t)>& make, float level,
+                                            const ReduceOptions& reduce, std::size_t batch_triangles) {
+    std::vector<double> generate(count, 0.0);
+    std::vector<BatchTask> results = extract_batch_then(
+        g, count,
+        [&](std::size_t i) {
+            const auto start = std::chrono::steady_clock::now();
+            const Domain domain = make(i);
+            generate[i] = seconds_since(start);
+            return g.extract(domain, level);
+        },
+        reduce, batch_triangles);
+    for (std::size_t i = 0; i < count; ++i) results[i].seconds.generate += generate[i];
+    return results;
 }
 
 } // namespace on_gpu

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "cuda_support.cuh"
 #include "exec_cuda.cuh"
@@ -72,6 +73,15 @@ struct Device::State {
     // .reduce and .download.
     Piece reduce(const Piece& piece, const ReduceOptions& options, ReduceReport* report);
     Piece reduce(const DeviceSurface& surface, const ReduceOptions& options, ReduceReport* report);
+    // tetiso::reduce_batch of host pieces; and a batch of surfaces extracted
+    // here: begin_batch, then append_to_batch after each extraction (the
+    // surface copied beside the others, checked as reduce() checks it),
+    // then reduce_batch (reduce/reduce_gpu.cu).
+    std::vector<Piece> reduce_batch(const std::vector<Piece>& pieces, const ReduceOptions& options, ReduceReport* report);
+    void begin_batch();
+    void append_to_batch(const DeviceSurface& surface);
+    std::vector<Piece> reduce_batch(const ReduceOptions& options, ReduceReport* report);
+    std::vector<int> batch_domains; // the domain of each surface appended
 
     // Each call's first step on its thread: this device current, and this
     // Device's arrays growing on its stream (cuda::growth_stream).

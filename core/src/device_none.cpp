@@ -28,6 +28,18 @@ Piece extract(Device::State&, const Decomposition&, int, const Field&, float, co
     no_gpu();
 }
 Piece reduce(Device::State&, const Piece&, const ReduceOptions&, ReduceReport*, StageSeconds*) { no_gpu(); }
+std::vector<Piece> reduce_batch(Device::State&, const std::vector<Piece>&, const ReduceOptions&, ReduceReport*,
+                                StageSeconds*) {
+    no_gpu();
+}
+std::vector<BatchTask> extract_batch(Device::State&, const Decomposition&, const std::vector<int>&, const Field&,
+                                            float, const ReduceOptions&, std::size_t) {
+    no_gpu();
+}
+std::vector<BatchTask> extract_batch(Device::State&, std::size_t, const std::function<Domain(std::size_t)>&,
+                                            float, const ReduceOptions&, std::size_t) {
+    no_gpu();
+}
 } // namespace on_gpu
 
 } // namespace tetiso

@@ -72,8 +72,29 @@ DomainTaskResult run_domain_task(const Partition& partition, int domain, const D
     return run_built(std::move(built), partition.pieces_are_manifold(), options, std::move(result));
 }
 
-std::vector<DomainTaskResult> run_domain_tasks(const Partition& partition, std::span<const int> domains,
+std::vector<DomainTaskResult> run_domain_tasks(const Partition& partition, const std::vector<int>& domains,
                                                const DomainTaskOptions& options) {
+    if (options.device.is_gpu() && options.reduce && !domains.empty()) {
+        const std::optional<ReduceOptions> reduce = reduce_options_of(options);
+        Device::State& gpu = options.device.state();
+        std::vector<on_gpu::BatchTask> tasks;
+        if (const auto* lattice = dynamic_cast<const LatticePartition*>(&partition))
+            tasks = on_gpu::extract_batch(gpu, lattice->decomposition(), domains, lattice->field(), options.level,
+                                          *reduce, options.batch_triangles);
+        else if (partition.pieces_are_manifold())
+            tasks = on_gpu::extract_batch(
+                gpu, domains.size(), [&](std::size_t i) { return partition.make_domain(domains[i]); }, options.level,
+                *reduce, options.batch_triangles);
+        if (!tasks.empty()) {
+            std::vector<DomainTaskResult> results(tasks.size());
+            for (std::size_t i = 0; i < tasks.size(); ++i) {
+                results[i].piece = std::move(tasks[i].piece);
+                results[i].seconds = tasks[i].seconds;
+                results[i].triangles_extracted = tasks[i].triangles_extracted;
+            }
+            return results;
+        }
+    }
     std::vector<DomainTaskResult> results;
     results.reserve(domains.size());
     for (const int domain : domains) results.push_back(run_domain_task(partition, domain, options));

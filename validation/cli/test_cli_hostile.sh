@@ -2,7 +2,8 @@
 # What a hostile but realistic user tries against the `tetiso` command (issue
 # 43's probe): outputs that name inputs or each other, inputs that are not
 # regular files, signals during a write, numbers in odd notations, and
-# options that mean nothing together. Each case is one row of README's
+# options that mean nothing together, meshes whose tetrahedra or pieces
+# overlap (hostile_meshes.py makes them). Each case is one row of README's
 # "Bad input" table. Usage: test_cli_hostile.sh PATH/TO/tetiso [sanitized]
 # ("sanitized": AddressSanitizer reserves terabytes of address space, so the
 # memory limit below is left to the unsanitized run; the time limit stays.)
@@ -167,6 +168,34 @@ says "flat.vtu: tetrahedron 0 has zero volume"
     cmp -s "$work/flipped.ply" "$work/unflipped.ply" && passed=$((passed + 1)) ||
     { echo "FAIL: a tetrahedron in the other corner order"; failures=$((failures + 1)); }
 
+# Tetrahedra that overlap where a mesh is read (hostile_meshes.py makes
+# them): one listed twice (named by its position and, where other cells come
+# before it, its cell or element number), in a .vtu, a .msh and a TetGen
+# mesh; a tangled mesh (a node moved across its neighbours' faces), whose
+# inverted tetrahedron is named where the mesh lists its tetrahedra in one
+# orientation; a mesh listed all in negative order is a convention and reads
+# to the same surface.
+python3 "$(dirname "$0")/hostile_meshes.py" "$meshes" "$work"
+expect 2 "a tetrahedron listed twice" -- "$tetiso" extract --mesh "$work/repeated.vtu" --array distance --level 1.5 -o "$out/t.ply"
+says "repeated.vtu: tetrahedron 1296 repeats tetrahedron 7: the same four corners"
+expect 2 "a tetrahedron listed twice after a triangle" -- "$tetiso" run --mesh "$work/renumbered.vtu" --array distance --level 1.5 --domains 2 --quiet -o "$out/t.ply"
+says "renumbered.vtu: tetrahedron 1296 (cell 1297) repeats tetrahedron 7 (cell 8)"
+expect 2 "a Gmsh element listed twice" -- "$tetiso" extract --mesh "$work/repeated.msh" --array distance --level 1.5 -o "$out/t.ply"
+says "repeated.msh: tetrahedron 1296 (element 1297) repeats tetrahedron 0 (element 1)"
+expect 2 "a TetGen tetrahedron listed twice" -- "$tetiso" split --mesh "$work/repeated.1" --field sphere --domains 2 -o "$out/s"
+says "repeated.1.ele: tetrahedron 16251 repeats tetrahedron 0"
+for command in "extract" "run --domains 2 --quiet"; do
+    # shellcheck disable=SC2086
+    expect 2 "$command on a tangled mesh" -- "$tetiso" $command --mesh "$work/tangled.vtu" --array distance --level 1.5 -o "$out/t.ply"
+    says "tangled.vtu: tetrahedron 735 is inverted: negatively oriented where the mesh's tetrahedra are positively (all but 6)"
+done
+expect 2 "a tangled mesh of mixed orders" -- "$tetiso" extract --mesh "$work/tangled-mixed.vtu" --array distance --level 1.5 -o "$out/t.ply"
+says "tangled-mixed.vtu: tetrahedron 516 and tetrahedron 735 lie on the same side of the face they share"
+"$tetiso" extract --mesh "$work/negative.vtu" --array distance --level 1.5 -o "$work/negative.ply" &&
+    "$tetiso" extract --mesh "$meshes/solver/cube-ascii.vtu" --array distance --level 1.5 -o "$work/positive.ply" &&
+    cmp -s "$work/negative.ply" "$work/positive.ply" && passed=$((passed + 1)) ||
+    { echo "FAIL: a mesh listed all in negative order"; failures=$((failures + 1)); }
+
 # .pvtu pieces that overlap: one listed twice, one under two names, and
 # pieces that each hold the whole mesh (as VTK's writer gives for a grid it
 # does not stream). Refused before any task, naming a tetrahedron and both
@@ -183,6 +212,23 @@ for pvtu in twice two-names whole; do
     done
 done
 says "pieces_0.vtu: the tetrahedron of node ids"
+# A piece inside another (the tetrahedra around the cube's centre node, and
+# the whole cube): found though the shared cells lie on one boundary only.
+# A tangled piece, refused by the scan. Pieces that share no node id read,
+# with one note naming them.
+for command in "extract --level 1.5" "run --level 1.5 --quiet" "split"; do
+    # shellcheck disable=SC2086
+    expect 2 "$command over a piece inside another" -- "$tetiso" $command --mesh "$work/inside.pvtu" --array distance -o "$out/t.ply"
+    says "core.vtu: the tetrahedron of node ids 114, 115, 122, 171 (cell 5) reaches inside"
+    says "whole.vtu: node id 114 lies on no face of that piece's boundary: pieces overlap"
+done
+expect 2 "a tangled piece" -- "$tetiso" run --mesh "$work/tangled.pvtu" --array distance --level 1.5 --quiet -o "$out/t.ply"
+says "tangled-low.vtu: tetrahedron 516 and tetrahedron 648 lie on the same side"
+expect 0 "pieces that share no node id" -- "$tetiso" extract --mesh "$work/apart.pvtu" --array distance --level 1.5 -o "$out/t.ply"
+says "tetiso: note: $work/apart.pvtu: the pieces fall into 2 groups that share no node id (piece 0 ($work/low.vtu); piece 1 ($work/high-apart.vtu))"
+[ "$(wc -l <"$work/stderr")" -eq 1 ] && passed=$((passed + 1)) || { echo "FAIL: the note is not one line"; failures=$((failures + 1)); }
+expect 0 "pieces that share node ids" -- "$tetiso" run --mesh "$work/halves.pvtu" --array distance --level 1.5 --quiet -o "$out/t.ply"
+[ ! -s "$work/stderr" ] && passed=$((passed + 1)) || { echo "FAIL: halves.pvtu: $(cat "$work/stderr")"; failures=$((failures + 1)); }
 
 # Options that mean nothing together, or nothing at all.
 expect 2 "--array with --field" -- "$tetiso" extract --mesh "$meshes/solver/cube-ascii.vtu" --array distance --field sphere -o "$out/t.ply"

@@ -57,44 +57,86 @@ same "run, unstructured mesh" run --mesh "$(dirname "$0")/../../meshes/cube.1" -
 same "extract --reduce" extract --lattice 60 --domains 4 --reduce
 "$tetiso" extract --lattice 50 --field torus -o "$work/raw.ply" || fail "extract"
 same "reduce" reduce "$work/raw.ply"
-# one_driver REPORT DEVICE RANKS: every task on the GPU ran on one rank (the
-# GPU's driver: rank 1, the node's lowest worker, where there are two workers
-# or more), some did, and under --device gpu every domain task did.
-one_driver() {
-    /usr/bin/python3 - "$@" <<'PY' || fail "mpirun -np $3 --device $2: $(cat "$1.why")"
+# The GPUs this machine shows CUDA.
+if [ -n "${CUDA_VISIBLE_DEVICES:-}" ]; then
+    gpus=$(echo "$CUDA_VISIBLE_DEVICES" | tr ',' '\n' | grep -c .)
+else
+    gpus=$(nvidia-smi -L 2>/dev/null | grep -c '^GPU')
+fi
+[ "$gpus" -ge 1 ] || gpus=1
+# drivers REPORT DEVICE RANKS [every]: the tasks on each GPU ran on one rank,
+# its driver: rank 1 + k drives GPU k where there are two workers or more (the
+# node's lowest workers drive its GPUs, one each, a worker left for the
+# seams), the lone worker runs them all where there is one. Some task ran on
+# a GPU; under --device gpu every domain task did; with `every`, each GPU that
+# has a driver got tasks.
+drivers() {
+    /usr/bin/python3 - "$@" "$gpus" <<'PY' || fail "mpirun -np $3 --device $2: $(cat "$1.why")"
 import json, sys
 report, device, ranks = json.load(open(sys.argv[1])), sys.argv[2], int(sys.argv[3])
-on_gpu = [t for t in report["tasks"] if t["device"] != "cpu"]
+every, gpus = sys.argv[4] == "every", int(sys.argv[-1])
+workers = ranks - 1
+driven = min(gpus, workers - 1) if workers >= 2 else 0
+ranks_of = {}
+for t in report["tasks"]:
+    if t["device"] != "cpu":
+        ranks_of.setdefault(int(t["device"].split()[1]), set()).add(t["rank"])
 why = None
-if not on_gpu:
-    why = "no task ran on the GPU"
-elif len({t["rank"] for t in on_gpu}) != 1 or (ranks > 2 and on_gpu[0]["rank"] != 1):
-    why = "GPU tasks ran on ranks %s, not on one driver" % sorted({t["rank"] for t in on_gpu})
-elif device == "gpu" and any(t["kind"] == "domain" and t["device"] == "cpu" for t in report["tasks"]):
+if not ranks_of:
+    why = "no task ran on a GPU"
+for gpu, on in sorted(ranks_of.items()):
+    expected = 1 + gpu if driven else 1
+    if on != {expected} or (driven and gpu >= driven):
+        why = "the tasks of GPU %d ran on ranks %s, not on its driver, rank %d" % (gpu, sorted(on), expected)
+if device == "gpu" and any(t["kind"] == "domain" and t["device"] == "cpu" for t in report["tasks"]):
     why = "a domain task ran on the CPU under --device gpu"
+if every and sorted(ranks_of) != list(range(max(driven, 1))):
+    why = "tasks ran on GPUs %s of the %d driven" % (sorted(ranks_of), max(driven, 1))
 open(sys.argv[1] + ".why", "w").write(why or "")
 sys.exit(1 if why else 0)
 PY
 }
 
 if [ -n "$mpiexec" ]; then
-    # Two ranks (a lone worker, which runs the GPU's tasks itself), three
-    # and five (the lowest worker drives the GPU, the others run the CPU's
-    # tasks), against one process on the CPU.
+    # Two ranks (a lone worker, which runs every GPU's tasks itself), three
+    # (the lowest worker drives GPU 0, the other runs the seams) and five
+    # (the lowest workers drive up to two GPUs, every GPU fed with batches),
+    # against one process on the CPU.
     "$tetiso" run --lattice 60 --domains 8 --quiet --device cpu -o "$work/alone.ply" || fail "run alone"
+    "$tetiso" run --lattice 80 --domains 64 --quiet --device cpu -o "$work/alone64.ply" || fail "run alone"
+    mpi() { # RANKS DOMAINS DEVICE ARGS...: the job under mpirun, against one CPU process
+        local ranks=$1 domains=$2 device=$3 lattice=60 alone=$work/alone.ply
+        shift 3
+        [ "$domains" -eq 64 ] && lattice=80 alone=$work/alone64.ply
+        OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "$mpiexec" --oversubscribe -np "$ranks" \
+            "$tetiso" run --lattice $lattice --domains "$domains" --quiet --device "$device" "$@" -o "$work/ranks.ply" \
+            --report "$work/ranks.json" 2>"$work/err" || {
+            fail "run under mpirun -np $ranks --device $device $*: $(cat "$work/err")"
+            return 1
+        }
+        cmp -s "$alone" "$work/ranks.ply" ||
+            fail "run under mpirun -np $ranks --device $device $* differs from one CPU process"
+    }
     for ranks in 2 3 5; do
         for device in gpu auto; do
-            OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "$mpiexec" --oversubscribe -np $ranks \
-                "$tetiso" run --lattice 60 --domains 8 --quiet --device $device -o "$work/ranks.ply" \
-                --report "$work/ranks.json" 2>"$work/err" || {
-                fail "run under mpirun -np $ranks --device $device: $(cat "$work/err")"
-                continue
-            }
-            cmp -s "$work/alone.ply" "$work/ranks.ply" ||
-                fail "run under mpirun -np $ranks --device $device differs from one CPU process"
-            one_driver "$work/ranks.json" $device $ranks
+            mpi $ranks 8 $device && drivers "$work/ranks.json" $device $ranks
         done
     done
+    # Many domains, small batches: every driven GPU gets some, under gpu and auto.
+    for device in gpu auto; do
+        mpi 5 64 $device --gpu-batch 4 && drivers "$work/ranks.json" $device 5 every
+    done
+    # --gpu names one GPU: only it is used, by one driver.
+    if [ "$gpus" -ge 2 ]; then
+        mpi 5 8 gpu --gpu 1 && /usr/bin/python3 - "$work/ranks.json" <<'PY' || fail "--gpu 1: $(cat "$work/why")"
+import json, os, sys
+report = json.load(open(sys.argv[1]))
+on = {(t["device"], t["rank"]) for t in report["tasks"] if t["device"] != "cpu"}
+why = "" if on == {("gpu 1", 1)} else "GPU tasks ran as %s, not on gpu 1 by rank 1" % sorted(on)
+open(os.path.join(os.path.dirname(sys.argv[1]), "why"), "w").write(why)
+sys.exit(1 if why else 0)
+PY
+    fi
 fi
 # The resource manager's choice, task by task: the surface whatever it is,
 # and with a GPU at hand some domain tasks on it.
@@ -103,5 +145,12 @@ fi
     2>"$work/err" || fail "run --device auto: $(cat "$work/err")"
 cmp -s "$work/cpu.ply" "$work/auto.ply" || fail "run --device auto differs from --device cpu"
 grep -q '"device": "gpu 0"' "$work/auto.json" || fail "run --device auto: no task ran on the GPU"
+# One process, --device gpu: every GPU of the machine takes grants in turn.
+if [ "$gpus" -ge 2 ]; then
+    "$tetiso" run --lattice 60 --domains 27 --quiet --device gpu --gpu-batch 2 -o "$work/gpus.ply" \
+        --report "$work/gpus.json" 2>"$work/err" || fail "run --device gpu on $gpus GPUs: $(cat "$work/err")"
+    cmp -s "$work/cpu.ply" "$work/gpus.ply" || fail "run --device gpu on $gpus GPUs differs from --device cpu"
+    grep -q '"device": "gpu 1"' "$work/gpus.json" || fail "run --device gpu: no task ran on GPU 1"
+fi
 [ "$failures" -eq 0 ] && echo "the GPU wrote the CPU's bytes everywhere" && exit 0
 exit 1

@@ -11,12 +11,7 @@ failure_test=${3:-}
 here=$(cd "$(dirname "$0")" && pwd)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
-passed=0
-failures=0
-ok() { passed=$((passed + 1)); }
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-mpi() { local k=$1; shift; timeout 300 "$mpiexec" --oversubscribe -np "$k" "$@"; }
+source "$(dirname "$0")/mpi_support.sh"
 
 # 1. Bit-identical output for K = 1 (no launcher), 2, 3, 4 ranks.
 args=(run --lattice 40 --domains 27 --field gyroid --quiet)

@@ -176,6 +176,62 @@ TEST(ResourceManager, UsesSeveralGpus) {
     EXPECT_NE(c.device, kCpu);
 }
 
+// Batches: a GPU may take up to 32 tasks of size 10 in one grant; it takes
+// as many as end no later than the task would alone on the CPU.
+TEST(ResourceManager, ABatchEndsNoLaterThanTheTaskAloneOnTheCpu) {
+    ResourceManager manager({cpu(1), gpu(0, 1)});
+    calibrate(manager, kCpu, 10, 1.04);
+    // The GPU has run batches of two sizes: 0.1 s a task.
+    calibrate(manager, kGpu, 10, 0.1);
+    calibrate(manager, kGpu, 20, 0.2);
+    const ResourceRequest r{kDomain, 10, {1, 1}, {1, 32}};
+    const Grant a = manager.request(r, 0);
+    EXPECT_EQ(a.device, kGpu);
+    EXPECT_EQ(a.count, 10);
+    EXPECT_NEAR(a.predicted_seconds, 1.0, 1e-9);
+    // The GPU is booked until 1.0: the CPU ends the next task first.
+    const Grant b = manager.request(r, 0);
+    EXPECT_EQ(b.device, kCpu);
+    EXPECT_EQ(b.count, 1);
+    // Both booked: the GPU's batch may end as late as the CPU's next task.
+    const Grant c = manager.request(r, 0);
+    EXPECT_EQ(c.device, kGpu);
+    EXPECT_EQ(c.count, 10);
+    EXPECT_NEAR(c.start, 1.0, 1e-9);
+    // The GPU's model learns the batch, at its size.
+    ASSERT_TRUE(manager.start(a.ticket, 0));
+    manager.finish(a.ticket, 0.5);
+    EXPECT_EQ(manager.model(kDomain, kGpu)->sizes(), 3u);
+    EXPECT_EQ(manager.model(kDomain, kGpu)->samples(), 7);
+}
+
+TEST(ResourceManager, UntilTwoBatchSizesAreSeenABatchTakesItsTasksInTurn) {
+    ResourceManager manager({cpu(1), gpu(0, 1)});
+    calibrate(manager, kCpu, 10, 1.04);
+    calibrate(manager, kGpu, 10, 0.1); // one size: no fit over sizes
+    const Grant a = manager.request({kDomain, 10, {1, 1}, {1, 32}}, 0);
+    EXPECT_EQ(a.device, kGpu);
+    EXPECT_EQ(a.count, 10);
+    // Nothing known of the GPU: it takes one task at a time, to learn,
+    // while the CPU could take the task.
+    ResourceManager fresh({cpu(1), gpu(0, 1)});
+    const Grant first = fresh.request({kDomain, 10, {1, 1}, {1, 32}}, 0);
+    EXPECT_EQ(first.device, kCpu);
+    const Grant second = fresh.request({kDomain, 10, {1, 1}, {1, 32}}, 0);
+    EXPECT_EQ(second.device, kGpu);
+    EXPECT_EQ(second.count, 1);
+}
+
+TEST(ResourceManager, WhereNoDeviceTakesTheTaskAloneABatchTakesAllItMay) {
+    ResourceManager manager({gpu(0, 1), gpu(1, 1)});
+    const ResourceRequest r{kDomain, 10, {1, 1}, {5, 5}};
+    const Grant a = manager.request(r, 0);
+    const Grant b = manager.request(r, 0);
+    EXPECT_EQ(a.count, 5);
+    EXPECT_EQ(b.count, 5);
+    EXPECT_NE(a.device, b.device);
+}
+
 TEST(ResourceManager, ServesWaitingClientsInOrder) {
     ResourceManager manager({gpu(0, 100)});
     calibrate(manager, 0, 10, 1.0);
@@ -286,4 +342,19 @@ TEST(NodePlacement, DevicesAndRequestsOfAJob) {
     EXPECT_EQ(gpu_only.request(domain_task, nullptr, nullptr).units, (std::vector<double>{0, 1}));
     EXPECT_EQ(gpu_only.request(0, &left, &right).units, (std::vector<double>{1, 0}));
     EXPECT_THROW(NodePlacement(job, 3, {0}, small, false).request(domain_task, nullptr, nullptr), Error);
+
+    // Batches: a GPU may take up to --gpu-batch domain tasks, and no more
+    // than its memory holds by the estimate or the caller allows; the CPU one.
+    EXPECT_EQ(two_gpus.batch_limit(), kDefaultGpuBatch);
+    EXPECT_EQ(two_gpus.request(domain_task, nullptr, nullptr, 3).batch, (std::vector<int>{1, 3, 3}));
+    EXPECT_EQ(two_gpus.request(domain_task, nullptr, nullptr, 1000).batch,
+              (std::vector<int>{1, kDefaultGpuBatch, kDefaultGpuBatch}));
+    EXPECT_TRUE(two_gpus.request(0, &left, &right, 3).batch.empty());
+    config.gpu_batch = 4;
+    const Job capped(config);
+    EXPECT_EQ(NodePlacement(capped, 3, {0}, 16000.0).batch_limit(), 4);
+    const double task_mib = static_cast<double>(job.partition().tet_count()) / 8 * kGpuBytesPerTet / (1 << 20) +
+                            kGpuTaskMarginMiB;
+    const double two_tasks = (kGpuContextMiB + 2.5 * task_mib) / kGpuUsableShare;
+    EXPECT_EQ(NodePlacement(job, 3, {0}, two_tasks).batch_limit(), 2);
 }

@@ -1,166 +1,17 @@
 // The job's scheduler (core/job/scheduler.hpp) on a simulated clock, driven
-// through a fake transport whose workers take the seconds a test gives them:
-// the order tasks go out in, rank 0 running the last seams alone, failures,
-// lending idle cores, GPU drivers, deadlines of a rank that stops answering;
-// and the surface of the single-process run, of the old one-task-at-a-time
-// loop and of simulated multi-worker schedules, byte for byte the same.
+// through a fake transport whose workers take the seconds a test gives them
+// (scheduler_fakes.hpp): the order tasks go out in, rank 0 running the last
+// seams alone, failures, lending idle cores, deadlines of a rank that stops
+// answering; the surface of the single-process run, of the old
+// one-task-at-a-time loop and of simulated multi-worker and two-GPU
+// schedules, byte for byte the same; and the messages' codec. GPU drivers
+// and batches: test_scheduler_gpus.cpp.
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <cmath>
-#include <cstring>
-#include <map>
-#include <set>
-#include <vector>
-
-#include "local_transport.hpp"
-#include "scheduler.hpp"
-#include "tetiso/error.hpp"
-#include "transport.hpp"
+#include "scheduler_fakes.hpp"
 
 using namespace tetiso;
-
-namespace {
-
-JobConfig lattice_job(int lattice, int domains) {
-    JobConfig config;
-    config.lattice = lattice;
-    config.domains = domains;
-    return config;
-}
-
-Piece piece_of(std::size_t triangles) {
-    Piece piece;
-    piece.triangles.assign(3 * triangles, 0);
-    return piece;
-}
-
-// Workers on a simulated clock. A task sent to a worker reports after
-// duration(task, worker) seconds, with a piece of a few triangles (or, with
-// `execute`, the piece the Job makes); a worker in `stopped` never reports;
-// a task in `failing` fails.
-class FakeTransport : public Transport {
-public:
-    struct Sent {
-        double at;
-        int worker, task, gpu;
-    };
-    struct Lent {
-        double at;
-        int borrower, lender;
-    };
-
-    FakeTransport(const Job& job, std::vector<int> workers, bool cores_known)
-        : job_(job) {
-        for (const int w : workers) {
-            WorkerEvent ready;
-            ready.kind = WorkerEvent::Kind::ready;
-            ready.worker = w;
-            ready.cores_known = cores_known;
-            pending_.emplace(0.0, std::move(ready));
-        }
-    }
-
-    std::function<double(int task, int worker)> duration = [](int, int) { return 1.0; };
-    std::set<int> stopped, failing;
-    bool execute = false;
-    int silent_at_stop = -1; // a worker that does not answer the stop
-
-    void send_task(int worker, TaskMessage message) override {
-        sent.push_back({now_, worker, message.task, message.gpu});
-        const double seconds = duration(message.task, worker);
-        if (stopped.count(worker)) return;
-        WorkerEvent event;
-        event.worker = worker;
-        if (failing.count(message.task)) {
-            event.kind = WorkerEvent::Kind::failure;
-            event.failure = FailureMessage{message.task, "injected"};
-        } else {
-            event.kind = WorkerEvent::Kind::result;
-            TaskRecord record;
-            record.task = message.task;
-            Piece piece = execute ? job_.execute(message.task, message.left ? &*message.left : nullptr,
-                                                 message.right ? &*message.right : nullptr, record,
-                                                 TaskThreads{1, {}, {}})
-                                  : piece_of(10);
-            event.result = result_message(record, seconds, 1, std::move(piece));
-        }
-        pending_.emplace(now_ + seconds, std::move(event));
-    }
-    void lend_cores(int borrower, int lender) override { lent.push_back({now_, borrower, lender}); }
-    std::optional<WorkerEvent> receive(double deadline) override {
-        if (pending_.empty() || pending_.begin()->first > deadline) {
-            if (!std::isfinite(deadline)) throw Error("the fake transport would wait for ever");
-            now_ = std::max(now_, deadline);
-            return std::nullopt;
-        }
-        auto first = pending_.begin();
-        now_ = std::max(now_, first->first);
-        WorkerEvent event = std::move(first->second);
-        pending_.erase(first);
-        return event;
-    }
-    void busy_for(double seconds) override { busy.push_back(seconds); }
-    double clock() const override { return now_; }
-    int stop(bool failed) override {
-        stops.push_back(failed);
-        return silent_at_stop;
-    }
-    void advance(double seconds) { now_ += seconds; }
-
-    std::vector<Sent> sent;
-    std::vector<Lent> lent;
-    std::vector<double> busy;
-    std::vector<bool> stops;
-
-private:
-    const Job& job_;
-    double now_ = 0;
-    std::multimap<double, WorkerEvent> pending_;
-};
-
-// Rank 0's run_here hook on the fake clock: `seconds` per task.
-DriveHooks hooks_here(FakeTransport& transport, const Job& job, double seconds, bool execute = false,
-                      int failing = -1) {
-    DriveHooks hooks;
-    hooks.run_here = [&transport, &job, seconds, execute, failing](int task, const Piece* left, const Piece* right) {
-        transport.advance(seconds);
-        if (task == failing) throw Error("injected here");
-        TaskRecord record;
-        record.task = task;
-        Piece piece = execute ? job.execute(task, left, right, record, TaskThreads{1, {}, {}}) : piece_of(10);
-        return result_message(record, seconds, 1, std::move(piece));
-    };
-    return hooks;
-}
-
-SchedulerSetup mpi_setup(int ranks, double task_timeout = 0) {
-    SchedulerSetup setup;
-    setup.ranks = ranks;
-    setup.seams_here = true;
-    setup.task_timeout = task_timeout;
-    return setup;
-}
-
-std::vector<int> queue_order(const Job& job, int count) {
-    TaskQueue queue(job);
-    std::vector<int> order;
-    for (int i = 0; i < count && queue.has_ready(); ++i) order.push_back(queue.pop());
-    return order;
-}
-
-template <class T>
-bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
-}
-
-bool same_surface(const Piece& a, const Piece& b) {
-    return same_bytes(a.x, b.x) && same_bytes(a.y, b.y) && same_bytes(a.z, b.z) && same_bytes(a.key, b.key) &&
-           same_bytes(a.flags, b.flags) && same_bytes(a.triangles, b.triangles) && same_bytes(a.domains, b.domains) &&
-           same_bytes(a.error, b.error);
-}
-
-} // namespace
+using namespace tetiso::scheduler_test;
 
 TEST(Scheduler, HandsOutTasksInQueueOrderToIdleWorkers) {
     const Job job(lattice_job(12, 8));
@@ -300,89 +151,6 @@ TEST(Scheduler, IdleWorkersLendTheirCoresOnceNothingIsReady) {
     for (const SchedulerAction& a : blind.decide(0)) EXPECT_NE(a.kind, SchedulerAction::Kind::lend_cores);
 }
 
-TEST(Scheduler, GpuDriversRunTheirGpusTasksAndNeitherLendNorBorrow) {
-    JobConfig config = lattice_job(12, 27);
-    config.device = JobConfig::Device::automatic;
-    const Job job(config);
-    // One node: rank 0 and workers 1-3; rank 1 drives GPU 0.
-    NodeLayout nodes;
-    nodes.node_of = {0, 0, 0, 0};
-    nodes.driving = {-1, 0, -1, -1};
-    nodes.workers = {3};
-    nodes.gpus = {{0}};
-    nodes.gpu_mib = {80000};
-    SchedulerSetup setup = mpi_setup(4);
-    setup.nodes = nodes;
-    FakeTransport transport(job, {1, 2, 3}, true);
-    // The GPU is fast: once calibrated, it gets most domains.
-    transport.duration = [](int, int worker) { return worker == 1 ? 0.1 : 1.0; };
-    Scheduler scheduler(job, setup);
-    ASSERT_TRUE(scheduler.places_tasks());
-    const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.1));
-    ASSERT_TRUE(result.has_value());
-    int on_gpu = 0;
-    for (const FakeTransport::Sent& s : transport.sent) {
-        if (s.worker == 1) {
-            EXPECT_EQ(s.gpu, 0) << "the driver runs its GPU's tasks only";
-            EXPECT_EQ(job.kind(s.task), TaskKind::domain);
-            ++on_gpu;
-        } else {
-            EXPECT_EQ(s.gpu, -1) << "task " << s.task << " for a GPU went to rank " << s.worker;
-        }
-    }
-    // Ten times faster, the GPU ends most domains first even behind a queue:
-    // their grants wait for the driver rather than go to an idle CPU worker.
-    EXPECT_GT(on_gpu, 27 / 2) << "of 27 domains";
-    // No rank ever holds two tasks.
-    std::map<int, std::vector<std::pair<double, double>>> spans;
-    for (const TaskRecord& r : result->tasks) spans[r.rank].push_back({r.start, r.end});
-    for (auto& [rank, s] : spans) {
-        std::sort(s.begin(), s.end());
-        for (std::size_t i = 1; i < s.size(); ++i) EXPECT_LE(s[i - 1].second, s[i].first + 1e-9) << "rank " << rank;
-    }
-    for (const FakeTransport::Lent& l : transport.lent) {
-        EXPECT_NE(l.lender, 1);
-        EXPECT_NE(l.borrower, 1);
-    }
-    // Every task a worker ran was placed, with a prediction.
-    for (const TaskRecord& r : result->tasks)
-        if (r.rank != 0) {
-            EXPECT_GT(r.predicted_seconds, 0) << job.describe(r.task);
-        }
-}
-
-TEST(Scheduler, DeviceGpuSendsEveryDomainToADriverAndRefusesWhatNoGpuHolds) {
-    JobConfig config = lattice_job(12, 8);
-    NodeLayout nodes;
-    nodes.node_of = {0, 0, 0};
-    nodes.driving = {-1, 0, -1};
-    nodes.workers = {2};
-    nodes.gpus = {{0}};
-    nodes.gpu_mib = {80000};
-    // Job's constructor checks --device gpu against this machine's GPU: the
-    // layout is what says the node has one here.
-    Job job(config);
-    const_cast<JobConfig&>(job.config()).device = JobConfig::Device::gpu;
-    SchedulerSetup setup = mpi_setup(3);
-    setup.nodes = nodes;
-    {
-        FakeTransport transport(job, {1, 2}, false);
-        Scheduler scheduler(job, setup);
-        ASSERT_TRUE(drive(job, scheduler, transport, hooks_here(transport, job, 0.1)).has_value());
-        for (const FakeTransport::Sent& s : transport.sent)
-            EXPECT_EQ(s.worker == 1, job.kind(s.task) == TaskKind::domain) << job.describe(s.task);
-    }
-    // A GPU too small for a domain: the first request fails the job on rank 0.
-    setup.nodes->gpu_mib = {100};
-    FakeTransport transport(job, {1, 2}, false);
-    Scheduler scheduler(job, setup);
-    EXPECT_FALSE(drive(job, scheduler, transport, hooks_here(transport, job, 0.1)).has_value());
-    ASSERT_TRUE(scheduler.failure().has_value());
-    EXPECT_EQ(scheduler.failure()->rank, 0);
-    EXPECT_NE(scheduler.failure()->what.find("MiB of GPU memory"), std::string::npos) << scheduler.failure()->what;
-    EXPECT_TRUE(transport.sent.empty());
-}
-
 TEST(Scheduler, AStoppedWorkerIsNamedAtItsTasksDeadline) {
     const Job job(lattice_job(12, 27));
     const double floor = 5;
@@ -517,6 +285,19 @@ TEST(Scheduler, TheSurfaceIsTheSameForEverySchedule) {
         ASSERT_TRUE(result.has_value());
         EXPECT_TRUE(same_surface(result->surface, reference));
     }
+    // Two GPUs' drivers given every domain in batches (run here on the host
+    // by Job::execute_batch), two workers for the seams.
+    SCOPED_TRACE("two GPUs, batches");
+    FakeTransport transport(job, {1, 2, 3, 4}, true);
+    transport.execute = true;
+    transport.duration = [](int task, int worker) { return 0.1 + ((task * 7 + worker) % 5) * 0.1; };
+    Scheduler scheduler(job, two_gpus_setup());
+    const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.2, true));
+    ASSERT_TRUE(result.has_value());
+    EXPECT_TRUE(same_surface(result->surface, reference));
+    std::size_t batched = 0;
+    for (const FakeTransport::Batch& b : transport.batches) batched += b.tasks.size();
+    EXPECT_GT(batched, 1u);
 }
 
 TEST(Messages, EachDecodesWhatItsEncoderWrote) {
@@ -563,9 +344,30 @@ TEST(Messages, EachDecodesWhatItsEncoderWrote) {
     EXPECT_EQ(decode_ready(encode(ReadyMessage{cores})).cores, cores);
     EXPECT_EQ(decode_lend(encode(LendMessage{cores})).cores, cores);
 
+    const BatchMessage batch = decode_batch(encode(BatchMessage{1, {4, 9, 11}}));
+    EXPECT_EQ(batch.gpu, 1);
+    EXPECT_EQ(batch.tasks, (std::vector<std::int32_t>{4, 9, 11}));
+    TaskRecord second = record;
+    second.task = 6;
+    second.stages.reduce = 0.75;
+    const BatchResultMessage results =
+        decode_batch_result(encode(batch_result_message({record, second}, 2.0, 3, {piece_of(2), piece_of(5)})));
+    ASSERT_EQ(results.results.size(), 2u);
+    EXPECT_EQ(results.results[0].record.task, 5);
+    EXPECT_EQ(results.results[1].record.task, 6);
+    EXPECT_EQ(results.results[1].piece.triangle_count(), 5u);
+    EXPECT_EQ(results.results[0].record.threads, 3);
+    // The batch's seconds shared out by the tasks' stage seconds.
+    EXPECT_DOUBLE_EQ(results.results[0].seconds, 0.5);
+    EXPECT_DOUBLE_EQ(results.results[1].seconds, 1.5);
+
     // Bytes that end early are an error, not a read past them.
     MessageBytes cut = encode(result_message(record, 1.5, 4, piece_of(6)));
     cut.resize(cut.size() - 1);
     EXPECT_THROW(decode_result(cut), Error);
     EXPECT_THROW(decode_task(MessageBytes(3)), Error);
+    MessageBytes cut_batch = encode(batch_result_message({record, second}, 2.0, 3, {piece_of(2), piece_of(5)}));
+    cut_batch.resize(cut_batch.size() - 1);
+    EXPECT_THROW(decode_batch_result(cut_batch), Error);
+    EXPECT_THROW(decode_batch(MessageBytes(6)), Error);
 }

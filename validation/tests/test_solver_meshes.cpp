@@ -9,7 +9,6 @@
 
 #include <algorithm>
 #include <array>
-#include <barrier>
 #include <memory>
 #include <thread>
 #include <filesystem>
@@ -19,6 +18,7 @@
 #include <vector>
 
 #include "test_support.hpp"
+#include "thread_ranks.hpp"
 #include "tetiso/check.hpp"
 #include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
@@ -469,29 +469,6 @@ TEST(SolverMeshes, PiecesThatDisagreeOnAValueAreRefused) {
     EXPECT_NE(pvtu_error(source).find("outside [0, 2^32)"), std::string::npos);
 }
 
-// Ranks simulated by threads: each builds the partition with its share of
-// the scan, and all_gather pools the shares behind a barrier.
-class ThreadRanks {
-public:
-    explicit ThreadRanks(int size) : shares_(static_cast<std::size_t>(size)), barrier_(size) {}
-    RankGroup group(int rank) {
-        RankGroup group;
-        group.rank = rank;
-        group.size = static_cast<int>(shares_.size());
-        group.all_gather = [this, rank](const std::string& mine) {
-            shares_[static_cast<std::size_t>(rank)] = mine;
-            barrier_.arrive_and_wait();
-            std::vector<std::string> all = shares_;
-            barrier_.arrive_and_wait();
-            return all;
-        };
-        return group;
-    }
-
-private:
-    std::vector<std::string> shares_;
-    std::barrier<> barrier_;
-};
 
 TEST(SolverMeshes, RanksShareTheScanAndAgree) {
     MeshSource source;

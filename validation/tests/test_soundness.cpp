@@ -19,6 +19,7 @@
 
 #include "extract_rules.hpp"
 #include "reduce/contact.hpp"
+#include "reduce_cases.hpp"
 #include "test_support.hpp"
 #include "tetiso/check.hpp"
 #include "tetiso/extract.hpp"
@@ -248,6 +249,39 @@ TEST(ReducedSurfacesAreClean, ASeamRegionPushedThroughTheRestOfThePiece) {
     config.max_error_spacings = 0.5;
     config.reduce_options.phi = 0.7;
     EXPECT_CLEAN_JOB(config);
+}
+
+// The pieces of a batch are separate surfaces, however near in space: a unit
+// sphere and one just inside it, batched, each come out as reduced alone.
+// Reduced as one piece, the outer sphere's collapses that would cut through
+// the inner one are refused, so the contact test does see the other sphere
+// where it may.
+TEST(ContactTest, PiecesOfABatchAreNotJudgedAgainstEachOther) {
+    const Piece outer = reduce_cases::icosphere(3);
+    Piece inner = outer, both = outer;
+    const auto shift = static_cast<std::int32_t>(outer.vertex_count());
+    for (std::size_t v = 0; v < inner.vertex_count(); ++v) {
+        for (std::vector<float>* c : {&inner.x, &inner.y, &inner.z}) (*c)[v] *= 0.98f;
+        inner.key[v] += outer.key.size();
+        both.x.push_back(inner.x[v]);
+        both.y.push_back(inner.y[v]);
+        both.z.push_back(inner.z[v]);
+        both.key.push_back(inner.key[v]);
+        both.flags.push_back(inner.flags[v]);
+    }
+    for (const std::int32_t v : outer.triangles) both.triangles.push_back(v + shift);
+    for (const int threads : {1, 2}) {
+        ReduceOptions options;
+        options.threads = threads;
+        const Piece outer_alone = reduce(outer, options), inner_alone = reduce(inner, options);
+        const std::vector<Piece> batched = reduce_batch({outer, inner}, options);
+        ASSERT_EQ(batched.size(), 2u);
+        EXPECT_TRUE(test::same_piece(outer_alone, batched[0])) << threads << " threads";
+        EXPECT_TRUE(test::same_piece(inner_alone, batched[1])) << threads << " threads";
+        const Piece together = reduce(both, options);
+        EXPECT_GT(together.triangle_count(), outer_alone.triangle_count() + inner_alone.triangle_count());
+        if (have_self_intersections()) EXPECT_EQ(violations(together), "");
+    }
 }
 
 // The contact test itself: triangles that cross, that touch within rounding,

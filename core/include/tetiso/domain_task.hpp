@@ -9,7 +9,6 @@
 #include <cstddef>
 #include <limits>
 #include <optional>
-#include <span>
 #include <vector>
 
 #include "tetiso/device.hpp"
@@ -28,6 +27,11 @@ struct DomainTaskOptions {
     // Reduce the extracted piece with these options (their device replaced
     // by the task's); none: extract only.
     std::optional<ReduceOptions> reduce;
+    // On a GPU, the most raw triangles run_domain_tasks reduces side by side
+    // in one batch (a batch's arrays must fit the GPU's memory, whatever its
+    // other tasks hold); 0: every domain of the call in one batch. A domain
+    // over it is a batch of its own. The pieces do not depend on it.
+    std::size_t batch_triangles = 0;
 };
 
 struct DomainTaskResult {
@@ -47,11 +51,18 @@ struct DomainTaskResult {
 DomainTaskResult run_domain_task(const Partition& partition, int domain, const DomainTaskOptions& options);
 
 // Several domains of one partition in one call, results in the order of
-// `domains`: on a GPU their pieces go through the same rounds side by side
-// (a batch), so that the fixed cost of a round is paid once for all of
-// them. Each result's piece is byte for byte what run_domain_task gives for
-// that domain alone. Seconds are the batch's, shared out by triangles.
-std::vector<DomainTaskResult> run_domain_tasks(const Partition& partition, std::span<const int> domains,
+// `domains`. On a GPU, with a reduction, their pieces are extracted one after
+// the other and reduced side by side in batches (reduce_batch,
+// options.batch_triangles), so that the fixed cost of a round is paid once
+// for a batch; elsewhere (the host, extraction only, a partition whose
+// pieces may be pinched) the domains run one after the other: on the host a
+// round's fixed cost is small beside its work, and batching measured slower
+// there than one domain per thread (results/reduce-batch). Each result's piece is byte for
+// byte what run_domain_task gives for that domain alone; its seconds are its
+// extraction's and its share, by raw triangles, of its batch's reduction.
+// Throws tetiso::Error as run_domain_task does for the first domain that
+// fails.
+std::vector<DomainTaskResult> run_domain_tasks(const Partition& partition, const std::vector<int>& domains,
                                                const DomainTaskOptions& options);
 
 // A domain already built, whose piece is a 2-manifold (a convex domain's);

@@ -153,4 +153,16 @@ struct ReduceReport {
 Piece reduce(const Piece& in, const ReduceOptions& options = {}, ReduceReport* report = nullptr,
              StageSeconds* seconds = nullptr);
 
+// Reduces several pieces side by side: one set of rounds serves all of them
+// (on a GPU the fixed cost of a round, its launches and its waits, is then
+// paid once for the batch), and each piece stops when it would alone. Each
+// result is byte for byte reduce(pieces[i], options), for any thread count
+// and device; the report is the batch's (its rounds, every piece's
+// triangles). Throws tetiso::Error for bad options as reduce() does, and for
+// a piece reduce() would refuse with reduce()'s message naming the piece
+// ("tetiso::reduce_batch: piece 3: ..."). A batch must fit where it runs:
+// on a GPU, all of its pieces and their rounds' arrays at once.
+std::vector<Piece> reduce_batch(const std::vector<Piece>& pieces, const ReduceOptions& options = {},
+                                ReduceReport* report = nullptr, StageSeconds* seconds = nullptr);
+
 } // namespace tetiso

@@ -94,6 +94,7 @@ struct Fans {
     Array<i32> problem_other, problem_count;
     Array<i32> corner, count; // build_fans's grouping of the corners
     Array<i32> large_scratch; // 6 per corner, only where a fan has more than kSmallFan faces
+    i32 faulty = -1;          // the vertex an input's check found faulty, for a batch to name its piece
 
     FansView view() const { return {off.data(), face.data(), next.data(), prev.data(), border.data()}; }
 };
@@ -245,6 +246,7 @@ void build_fans(Exec& exec, Surface<Exec>& s, bool validate, Fans<Exec>& fans) {
     typename Exec::template Array<i32> faulty;
     exec.filter(nv, [=] TETISO_HD(i64 v) { return problem[v] != kFanOk; }, faulty);
     const i32 v = exec.get(faulty, 0);
+    fans.faulty = v;
     const u8 what = exec.get(fans.problem, v);
     if (!validate)
         throw InternalError("tetiso::reduce: vertex (key " + key_text(exec.get(s.key, v)) + ") became non-manifold");

@@ -117,16 +117,20 @@ struct Compaction {
     Surface<Exec> spare; // compact()'s second set of arrays
     Array<u8> spare_marks;
     Array<u32> spare_masks;
+    Array<i32> spare_tags;
 };
 
 // Drops removed vertices and triangles, keeping the order of the rest. The
 // ranks are integer scans; the copies are gathers into the spare arrays,
 // which then change places with the live ones. vertex_marks, vertex_masks:
 // per-vertex arrays that follow the vertices (changed, refused_slots);
-// triangle_refs: n triangle indices to renumber (the samples' owners).
+// triangle_refs: n triangle indices to renumber (the samples' owners);
+// vertex_tags, where given: a per-vertex array that follows the vertices too
+// (a batch's piece of each vertex).
 template <class Exec>
 void compact(Exec& exec, Surface<Exec>& s, Compaction<Exec>& c, typename Exec::template Array<u8>& vertex_marks,
-             typename Exec::template Array<u32>& vertex_masks, i32* triangle_refs, i32 refs) {
+             typename Exec::template Array<u32>& vertex_masks, i32* triangle_refs, i32 refs,
+             typename Exec::template Array<i32>* vertex_tags = nullptr) {
     const i32 nv = s.nv, nt = s.nt;
     const u8* vertex_alive = c.vertex_alive.data();
     const i32 next = exec.rank(nv, [=] TETISO_HD(i64 v) { return vertex_alive[v] != 0; }, c.vertex_rank);
@@ -136,6 +140,7 @@ void compact(Exec& exec, Surface<Exec>& s, Compaction<Exec>& c, typename Exec::t
     to.flags.resize(static_cast<std::size_t>(next));
     c.spare_marks.resize(static_cast<std::size_t>(next));
     c.spare_masks.resize(static_cast<std::size_t>(next));
+    c.spare_tags.resize(vertex_tags ? static_cast<std::size_t>(next) : 0);
     {
         const i32* remap = c.vertex_rank.data();
         const float* xyz = s.xyz.data();
@@ -148,6 +153,8 @@ void compact(Exec& exec, Surface<Exec>& s, Compaction<Exec>& c, typename Exec::t
         u8* to_flags = to.flags.data();
         u8* to_marks = c.spare_marks.data();
         u32* to_masks = c.spare_masks.data();
+        const i32* tags = vertex_tags ? vertex_tags->data() : nullptr;
+        i32* to_tags = c.spare_tags.data();
         exec.for_each(nv, [=] TETISO_HD(i64 v) {
             const i32 r = remap[v];
             if (r < 0) return;
@@ -156,6 +163,7 @@ void compact(Exec& exec, Surface<Exec>& s, Compaction<Exec>& c, typename Exec::t
             to_flags[r] = flags[v];
             to_marks[r] = marks[v];
             to_masks[r] = masks[v];
+            if (tags) to_tags[r] = tags[v];
         });
     }
     s.xyz.swap(to.xyz);
@@ -163,6 +171,7 @@ void compact(Exec& exec, Surface<Exec>& s, Compaction<Exec>& c, typename Exec::t
     s.flags.swap(to.flags);
     vertex_marks.swap(c.spare_marks);
     vertex_masks.swap(c.spare_masks);
+    if (vertex_tags) vertex_tags->swap(c.spare_tags);
     s.nv = next;
     const u8* triangle_alive = c.triangle_alive.data();
     const i32 tn = exec.rank(nt, [=] TETISO_HD(i64 t) { return triangle_alive[t] != 0; }, c.triangle_rank);

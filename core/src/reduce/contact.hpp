@@ -30,8 +30,9 @@ namespace tetiso::reduction {
 // bucket of its own that every query reads (few do: the cell is as large as
 // nine in ten of the round's triangles).
 constexpr int kMaxCellsPerTriangle = 27;
-// A query spanning more cells than this is refused (its operation waits for
-// a round whose cells are larger).
+// A query spanning more cells than this reads every triangle instead: the
+// answer must not depend on the cell size, which a batch of pieces
+// (batch.hpp) chooses from all of them.
 constexpr i64 kMaxCellsPerQuery = 512;
 // Cell indices are clamped to 21 bits a side: cells beyond merge, which only
 // makes a bucket hold more.
@@ -45,6 +46,7 @@ struct ContactGridView {
     const i32* order;      // entries grouped by bucket
     const i32* entry_tri;  // per entry, its triangle: the surface's, then from nt on the obstacles
     const float* obstacle; // 9 floats per obstacle (ReduceOptions::obstacles)
+    const i32* vertex_piece; // a batch's piece of each vertex (batch.hpp); null for one piece
     i32 nt;                // the surface's triangles
     i32 groups;            // buckets of cells (a power of two); bucket `groups` holds the large triangles
     double inv_cell;       // 1 / cell size (a power of two)
@@ -125,7 +127,7 @@ struct ContactGrid {
     Array<u32> offsets;
     Array<float> obstacle;
     i32 obstacles = 0;
-    ContactGridView grid{nullptr, nullptr, nullptr, nullptr, 0, 0, 0.0, false};
+    ContactGridView grid{nullptr, nullptr, nullptr, nullptr, nullptr, 0, 0, 0.0, false};
 
     ContactGridView view() const { return grid; }
 };
@@ -145,11 +147,12 @@ void load_obstacles(Exec& exec, const std::vector<float>& obstacles, ContactGrid
 // integer counts), each triangle goes into the bucket of every cell its box
 // covers.
 template <class Exec>
-void build_contact_grid(Exec& exec, const SurfaceView& s, ContactGrid<Exec>& cg) {
+void build_contact_grid(Exec& exec, const SurfaceView& s, const i32* vertex_piece, ContactGrid<Exec>& cg) {
     cg.grid.on = false;
     const i64 total = static_cast<i64>(s.nt) + cg.obstacles;
     if (s.nt == 0) return;
-    ContactGridView g{nullptr, nullptr, nullptr, cg.obstacles > 0 ? cg.obstacle.data() : nullptr, s.nt, 1, 1.0, true};
+    ContactGridView g{nullptr, nullptr,      nullptr, cg.obstacles > 0 ? cg.obstacle.data() : nullptr,
+                      vertex_piece, s.nt, 1,   1.0,     true};
     exec.assign(cg.histogram, kExtentBins, i32{0});
     i32* histogram = cg.histogram.data();
     exec.for_each(total, [=] TETISO_HD(i64 t) { hd::atomic_add(histogram + extent_bin(g, s, static_cast<i32>(t)), 1); });
@@ -267,11 +270,16 @@ TETISO_HD inline bool triangles_meet(Vec p0, Vec p1, Vec p2, Vec q0, Vec q1, Vec
 }
 
 // Calls f(t) for every triangle in the cells around box (several times for
-// some); false when the box spans too many cells to look.
+// some, and for others beside them: f tests the boxes itself), until f
+// returns false; whether none did.
 template <class F>
 TETISO_HD bool for_each_triangle_near(const ContactGridView& g, const Box& box, double margin, const F& f) {
     const CellRange r = cells_of(g, box, margin);
-    if (r.count() > kMaxCellsPerQuery) return false;
+    if (r.count() > kMaxCellsPerQuery) {
+        for (i32 k = 0, end = g.first[g.groups + 1]; k < end; ++k)
+            if (!f(g.entry_tri[k])) return false;
+        return true;
+    }
     const auto bucket_range = [&](i32 bucket) {
         for (i32 k = g.first[bucket], end = g.first[bucket + 1]; k < end; ++k)
             if (!f(g.entry_tri[g.order[k]])) return false;

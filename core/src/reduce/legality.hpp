@@ -348,11 +348,15 @@ struct FaceCorners {
 // rewrites; had_met(k, px, py, pz): whether the faces new face k replaces
 // met that triangle already (a contact the input had is no new one: where
 // extraction left coincident vertices, cleaning them up must stay
-// possible). box: holds every new face.
+// possible). box: holds every new face. at: a vertex of the operation,
+// whose piece is the only one its faces are judged against (the pieces of a
+// batch are separate surfaces, each reduced as it would be alone).
 template <class FaceAt, class Replaced, class HadMet>
-TETISO_HD bool clear_of_distant(const RoundView& m, const Box& box, int faces, const FaceAt& face_at,
+TETISO_HD bool clear_of_distant(const RoundView& m, i32 at, const Box& box, int faces, const FaceAt& face_at,
                                 const Replaced& replaced, const HadMet& had_met) {
     if (!m.contact.on) return true;
+    const i32* vertex_piece = m.contact.vertex_piece;
+    const i32 piece = vertex_piece ? vertex_piece[at] : 0;
     const double reach = std::max({std::abs(box.lo.x), std::abs(box.lo.y), std::abs(box.lo.z), std::abs(box.hi.x),
                                    std::abs(box.hi.y), std::abs(box.hi.z)});
     const double margin = kContactUlps * std::numeric_limits<float>::epsilon() * reach;
@@ -363,7 +367,7 @@ TETISO_HD bool clear_of_distant(const RoundView& m, const Box& box, int faces, c
         const bool surface = t < g.nt;
         const i32 x = surface ? m.s.tri[3 * t] : -2, y = surface ? m.s.tri[3 * t + 1] : -2,
                   z = surface ? m.s.tri[3 * t + 2] : -2;
-        if (surface && replaced(x, y, z)) return true;
+        if (surface && ((vertex_piece && vertex_piece[x] != piece) || replaced(x, y, z))) return true;
         const Vec px = g.corner(m.s, t, 0), py = g.corner(m.s, t, 1), pz = g.corner(m.s, t, 2);
         const Box tb = box_of(px, py, pz);
         if (tb.apart(box, margin)) return true;
@@ -391,7 +395,7 @@ TETISO_HD inline bool collapse_clear_of_distant(const RoundView& m, i32 u, i32 w
         box.add(fan.b(f));
     }
     return clear_of_distant(
-        m, box, fan.count,
+        m, u, box, fan.count,
         [&](int f) { return FaceCorners{{-1, fan.ia[f], fan.ib[f]}, {fan.p, fan.a(f), fan.b(f)}}; },
         [&](i32 x, i32 y, i32 z) { return x == u || x == w || y == u || y == w || z == u || z == w; },
         [&](int f, Vec px, Vec py, Vec pz) {
@@ -654,7 +658,7 @@ TETISO_HD inline bool propose_flip(const RoundView& m, i32 e, const OpsView& ops
     const auto had_met = [&](int, Vec px, Vec py, Vec pz) {
         return triangles_meet(pu, pw, pc, px, py, pz) || triangles_meet(pw, pu, pd, px, py, pz);
     };
-    if (!clear_of_distant(m, box, 2, [&](int k) { return made[k]; }, replaced, had_met)) return false;
+    if (!clear_of_distant(m, u, box, 2, [&](int k) { return made[k]; }, replaced, had_met)) return false;
     // Error: the gap between the two diagonals.
     const Vec axis = cross(pw - pu, pd - pc);
     const double axis_len = norm(axis);

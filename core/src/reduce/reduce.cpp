@@ -7,9 +7,11 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "../device_entry.hpp"
 #include "../exec_host.hpp"
+#include "batch.hpp"
 #include "input.hpp"
 #include "rounds.hpp"
 #include "tetiso/detail/reduce_policy.hpp"
@@ -127,6 +129,59 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     ReduceReport local_report;
     ReduceReport& rep = report ? *report : local_report;
     Piece out = reduce_on_host(in, options, &rep, false, 0, false);
+    if (seconds) seconds->reduce += rep.seconds;
+    return out;
+}
+
+void check_batch_input(const std::vector<Piece>& pieces) {
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+        try {
+            check_reduce_input(pieces[i]);
+        } catch (const Error& e) {
+            throw batch_error(i, e);
+        }
+    }
+}
+
+Error batch_error(std::size_t piece, const Error& e) {
+    std::string what = e.what();
+    const std::string alone = "tetiso::reduce: ";
+    if (what.starts_with(alone)) what.erase(0, alone.size());
+    return Error("tetiso::reduce_batch: piece " + std::to_string(piece) + ": " + what);
+}
+
+std::vector<Piece> reduce_batch(const std::vector<Piece>& pieces, const ReduceOptions& options, ReduceReport* report,
+                                StageSeconds* seconds) {
+    if (options.device.is_gpu()) return on_gpu::reduce_batch(options.device.state(), pieces, options, report, seconds);
+    const auto start = std::chrono::steady_clock::now();
+    check_reduce_options(options);
+    check_batch_input(pieces);
+    if (pieces.empty()) return {};
+    ReduceReport local_report;
+    ReduceReport& rep = report ? *report : local_report;
+    rep = ReduceReport{};
+    for (const Piece& p : pieces) {
+        rep.triangles_in += p.triangle_count();
+        rep.vertices_in += p.vertex_count();
+    }
+    HostExec exec;
+    const int available = parallel::resolve_threads(options.threads);
+    exec.threads = std::min(available, reduction::kMaxRoundThreads);
+    reduction::ReductionState<HostExec> state;
+    reduction::load_pieces(exec, pieces, options.max_error > 0, state);
+    try {
+        reduction::run_rounds(exec, state, options, available, rep);
+    } catch (const Error& e) {
+        if (state.fans.faulty < 0) throw;
+        throw batch_error(static_cast<std::size_t>(exec.get(state.vertex_piece, state.fans.faulty)), e);
+    }
+    std::vector<Piece> out = reduction::unload_pieces(exec, state, options.keep_samples);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        out[i].domains = pieces[i].domains;
+        rep.triangles_out += out[i].triangle_count();
+        rep.vertices_out += out[i].vertex_count();
+    }
+    rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (seconds) seconds->reduce += rep.seconds;
     return out;
 }

@@ -20,7 +20,7 @@
 //   7. compact:   drop removed vertices and triangles, keeping their order
 //                 (so vertex keys stay sorted).
 // Rounds repeat until no candidate is left, two rounds in a row collapse
-// nothing, or max_rounds is reached. Every per-element computation depends
+// nothing, or max_rounds is reached; in a batch (batch.hpp), piece by piece. Every per-element computation depends
 // on that element's inputs only and no floating-point value is ever summed
 // across elements, so the output is the same for any thread count and
 // device.
@@ -72,6 +72,14 @@ struct ReductionState {
     Selection<Exec> selection;
     Compaction<Exec> compaction;
     HandedOn<Exec> handed_on;
+    // A batch (batch.hpp): pieces side by side in the same arrays, each
+    // reduced as it would be alone. vertex_piece[v]: the piece of vertex v
+    // (empty with one piece); per piece: this round's collapses and flips
+    // (2 entries), its rounds in a row without a collapse, and whether it
+    // has finished (frozen: nothing of it changes any more).
+    i32 pieces = 1;
+    Array<i32> vertex_piece, piece_ops, piece_idle;
+    Array<u8> piece_done;
 
     OpsView ops() {
         return {kind.data(), priority.data(), px.data(), py.data(), pz.data(), err.data(), survivor.data()};
@@ -99,6 +107,17 @@ inline Params make_params(const ReduceOptions& o) {
 // surface at N = 100.
 constexpr int kMaxRoundThreads = 16;
 
+// Samples made on the host (those a reduced piece carries) into the state.
+template <class Exec>
+void upload_samples(Exec& exec, const HostSamples& h, ReductionState<Exec>& st) {
+    exec.upload(h.point, st.samples.point);
+    exec.upload(h.owner, st.samples.owner);
+    exec.upload(h.far, st.samples.far);
+    exec.upload(h.far_point, st.samples.far_point);
+    st.samples.count = static_cast<i32>(h.point.size());
+    st.samples.on = true;
+}
+
 // Loads a piece (checked by the caller) into the state: its surface and,
 // with an error bound, its samples.
 template <class Exec>
@@ -120,19 +139,14 @@ void load_piece(Exec& exec, const Piece& in, bool bounded, ReductionState<Exec>&
     else exec.upload(in.error, s.err);
     s.nv = static_cast<i32>(nv);
     s.nt = static_cast<i32>(nt);
+    st.pieces = 1;
     st.samples.on = false;
     if (!bounded) return;
     if (in.error.empty()) {
         build_raw_samples(exec, s.view(), st.samples, st.scratch, st.rank);
         return;
     }
-    const HostSamples h = samples_of_reduced_input(in);
-    exec.upload(h.point, st.samples.point);
-    exec.upload(h.owner, st.samples.owner);
-    exec.upload(h.far, st.samples.far);
-    exec.upload(h.far_point, st.samples.far_point);
-    st.samples.count = static_cast<i32>(h.point.size());
-    st.samples.on = true;
+    upload_samples(exec, samples_of_reduced_input(in), st);
 }
 
 // The rounds. threads: what the host may use to begin with (options.
@@ -145,6 +159,11 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
     exec.assign(st.changed, s.nv, u8{0});
     exec.assign(st.refused_slots, s.nv, u32{0});
     load_obstacles(exec, options.obstacles, st.contact);
+    const i32 pieces = st.pieces;
+    exec.assign(st.piece_done, pieces, u8{0});
+    exec.assign(st.piece_idle, pieces, i32{0});
+    u8* piece_done = st.piece_done.data();
+    i32* piece_idle = st.piece_idle.data();
     ReduceStageSeconds& seconds = rep.stages;
     // Stage times are marks (on the device, events on its stream), summed
     // once the round is over: timing a stage never waits for the device.
@@ -163,7 +182,6 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         for (const Lap& l : laps) *l.into += exec.seconds_between(l.from, l.to);
         laps.clear();
     };
-    int idle_rounds = 0;
     for (int round = 0;; ++round) {
         if constexpr (Exec::kHost) {
             if (options.more_threads)
@@ -198,7 +216,9 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         exec.assign(st.refused, ne, u8{0});
         if (st.samples.on) st.samples.sort(exec, st.geometry, s.nt);
         build_cones(exec, s.view(), fans, st.geometry.data(), st.cones);
-        build_contact_grid(exec, s.view(), st.contact);
+        // The piece of a vertex: 0 unless this is a batch of several.
+        const i32* vertex_piece = pieces > 1 ? st.vertex_piece.data() : nullptr;
+        build_contact_grid(exec, s.view(), vertex_piece, st.contact);
         const EdgesView edges = st.edges.view();
         const RoundView m{s.view(),         fans,   edges, st.geometry.data(), st.cones.data(),
                           st.samples.view(), params, round, st.contact.view()};
@@ -208,7 +228,9 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
             const u8* changed = st.changed.data();
             exec.for_each(ne, [=] TETISO_HD(i64 ei) {
                 const i32 e = static_cast<i32>(ei);
-                if (known_refused(refused_slots, edges, e) && unchanged(fans, edges, changed, e)) ops.kind[e] = kQuiet;
+                // A finished piece of a batch is frozen: its edges offer nothing.
+                if (piece_done[vertex_piece ? vertex_piece[edges.v0[e]] : 0]) ops.kind[e] = kQuiet;
+                else if (known_refused(refused_slots, edges, e) && unchanged(fans, edges, changed, e)) ops.kind[e] = kQuiet;
                 else classify(m, e, ops);
             });
         }
@@ -286,6 +308,15 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         // would find what this one did.
         exec.count_into(ne, [=] TETISO_HD(i64 e) { return chosen[e] && kind[e] == kCollapse; }, kTallyCollapses);
         exec.filter_into(ne, [=] TETISO_HD(i64 e) { return chosen[e] && kind[e] == kFlip; }, st.to_move, kTallyFlips);
+        // Each piece of a batch stops as it would alone: its own counts.
+        i32* piece_ops = nullptr;
+        if (pieces > 1) {
+            exec.assign(st.piece_ops, 2 * static_cast<i64>(pieces), i32{0});
+            piece_ops = st.piece_ops.data();
+            exec.for_each(ne, [=] TETISO_HD(i64 e) {
+                if (chosen[e]) hd::atomic_add(piece_ops + 2 * vertex_piece[edges.v0[e]] + (kind[e] == kFlip), i32{1});
+            });
+        }
         // The samples move first: they are placed on the new faces by reading
         // the fans and positions that their legality test read. Each move
         // costs about what a legality test does.
@@ -305,26 +336,41 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         });
         exec.count_into(s.nv, [=] TETISO_HD(i64 v) { return (applied.changed[v] & applied.vertex_alive[v]) != 0; },
                         kTallyChanged);
+        // The stopping rule, piece by piece: a piece finishes after a round
+        // that chose nothing for it (which went on to the end changing
+        // nothing of it), or after its second round in a row without a
+        // collapse. Alone, the piece's counts are the round's.
+        {
+            const i64* round_collapses = exec.tally_at(kTallyCollapses);
+            const i64* round_flips = exec.tally_at(kTallyFlips);
+            exec.for_each(pieces, [=] TETISO_HD(i64 p) {
+                if (piece_done[p]) return;
+                const i64 collapses = piece_ops ? piece_ops[2 * p] : *round_collapses;
+                const i64 flips = piece_ops ? piece_ops[2 * p + 1] : *round_flips;
+                if (collapses == 0 && flips == 0) {
+                    piece_done[p] = 1;
+                    return;
+                }
+                piece_idle[p] = collapses == 0 ? piece_idle[p] + 1 : 0;
+                if (piece_idle[p] >= 2) piece_done[p] = 1;
+            });
+            exec.count_into(pieces, [=] TETISO_HD(i64 p) { return piece_done[p] == 0; }, kTallyActive);
+        }
         const auto tally = exec.read_tally(); // the round's one wait for its statistics
         stats.evaluated = evaluated + static_cast<std::size_t>(tally[kTallyEvaluated]);
         stats.collapses = static_cast<std::size_t>(tally[kTallyCollapses]);
         stats.flips = static_cast<std::size_t>(tally[kTallyFlips]);
         stats.changed_vertices = static_cast<std::size_t>(tally[kTallyChanged]);
         lap(seconds.apply);
-        if (stats.collapses == 0 && stats.flips == 0) {
-            settle_laps();
-            stats.seconds = exec.seconds_between(round_start, last_mark);
-            rep.rounds.push_back(stats);
-            break;
-        }
+        // Compaction leaves a piece without a collapse as it is.
         if (stats.collapses > 0)
-            compact(exec, s, c, st.changed, st.refused_slots, owner, st.samples.on ? st.samples.count : 0);
+            compact(exec, s, c, st.changed, st.refused_slots, owner, st.samples.on ? st.samples.count : 0,
+                    pieces > 1 ? &st.vertex_piece : nullptr);
         lap(seconds.compact);
         settle_laps();
         stats.seconds = exec.seconds_between(round_start, last_mark);
         rep.rounds.push_back(stats);
-        idle_rounds = stats.collapses == 0 ? idle_rounds + 1 : 0;
-        if (idle_rounds >= 2) break;
+        if (tally[kTallyActive] == 0) break;
     }
 }
 

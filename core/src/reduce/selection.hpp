@@ -259,7 +259,8 @@ TETISO_HD inline i32 rank_of_item(const i32* first, i32 n, i32 item) {
 
 // The counts of a round that CudaExec keeps on the device (the slots of
 // Exec::count_into, filter_into).
-enum TallySlot : int { kTallyEvaluated, kTallyCollapses, kTallyFlips, kTallyChanged, kTallyDrySurvivors };
+// kTallyActive: the pieces of a batch not finished after the round.
+enum TallySlot : int { kTallyEvaluated, kTallyCollapses, kTallyFlips, kTallyChanged, kTallyDrySurvivors, kTallyActive };
 
 // Speculation's dry runs: every collapse of the round tested on its state,
 // its samples placed one a thread (the tests of a collapse are a few hundred

@@ -51,13 +51,19 @@ struct MeshArrays {
     std::vector<GlobalId> ids;      // global node ids, one per point; empty if none found
     std::vector<std::int32_t> tets; // 4 point indices each
     std::size_t ghost_cells = 0;    // cells skipped as ghosts
+    // Each tetrahedron's number in the file, for messages, where that is not
+    // its position among the tetrahedra: the VTK cell index (other cells
+    // before it), the Gmsh element tag. Empty where every number is the position.
+    std::vector<std::uint64_t> tet_numbers;
+    const char* number_word = "cell";
 };
 
 // The whole mesh of `source` as one domain: node i has global id i, no node
 // lies on an interface, every tetrahedron is positively oriented. Throws
 // tetiso::Error naming the file and what is wrong, including options that
 // do not apply to the format (an attribute of a VTK file, an array of a
-// TetGen one) and a field that is neither. For a .pvtu, `piece_of_tet`
+// TetGen one), a field that is neither, and tetrahedra that overlap
+// (check_tetrahedra; for a .pvtu, pvtu.hpp). For a .pvtu, `piece_of_tet`
 // (where given) receives each tetrahedron's piece, in the file's order.
 Domain read_mesh(const MeshSource& source, std::vector<std::int32_t>* piece_of_tet = nullptr);
 
@@ -65,7 +71,7 @@ Domain read_mesh(const MeshSource& source, std::vector<std::int32_t>* piece_of_t
 // field taken from `arrays.f` or evaluated by `field` at the coordinates as
 // read, tetrahedra reoriented where negative. Node i gets global id i.
 // Throws tetiso::Error (naming `name`, the file) for a tetrahedron of zero
-// volume (orient_tetrahedra).
+// volume or tetrahedra that overlap (check_tetrahedra).
 Domain domain_from_arrays(MeshArrays arrays, const Field* field, const std::string& name = "the mesh");
 
 // Whether tetrahedron (a, b, c, d) of `domain` is negatively oriented, in
@@ -78,9 +84,25 @@ double signed_volume6(const Domain& domain, std::int32_t a, std::int32_t b, std:
 // where its volume is negative): a mesh listing its tetrahedra in mixed
 // corner orders reads right. Throws tetiso::Error naming `name` and the
 // tetrahedron (counting tetrahedra only, in the file's order) for one of zero
-// volume, which has no orientation. A tangled mesh (tetrahedra that overlap,
-// as where a node was moved across a face) is not detected: its surface
-// overlaps where its tetrahedra do.
+// volume, which has no orientation. Overlaps are check_tetrahedra's.
 void orient_tetrahedra(Domain& domain, const std::string& name);
+
+// orient_tetrahedra, then the check that no two tetrahedra overlap across a
+// face, which is what extraction needs for a consistently oriented surface
+// (each triangle is wound by its own tetrahedron): two tetrahedra on one
+// face must lie on opposite sides of it, and no face may have three. Throws
+// tetiso::Error naming `name` and the first tetrahedron in the file's order
+// that clashes, by its position and its number in the file (`numbers`,
+// MeshArrays::tet_numbers, called `number_word`), and how many faces clash:
+// a tetrahedron listed twice; one inverted (its corners listed against the
+// orientation most of the mesh's are listed in, and on the same side of a
+// face as its neighbour); two that overlap so otherwise; several on one
+// face. A mesh listed all in negative order is read (each is oriented by its
+// own corners), as is one that mixes orders without folding. Not detected:
+// an overlap without such a face, as where the mesh's boundary passes
+// through itself (a search in space would be needed). Costs a sort of the
+// faces, bucketed by their smallest corner.
+void check_tetrahedra(Domain& domain, const std::string& name, const std::vector<std::uint64_t>& numbers = {},
+                      const char* number_word = "cell");
 
 } // namespace tetiso

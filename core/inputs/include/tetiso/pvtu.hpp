@@ -11,10 +11,18 @@
 // the merge tree (heavy-edge matching, as MeshPartition builds it) and the
 // checks between pieces, in memory of the order of the pieces' surfaces. A
 // task then reads its piece again, alone. Ghost cells (vtkGhostType) are
-// skipped, so pieces do not overlap; pieces that still do (one listed twice
-// or under two names, each holding the whole mesh, cells shared but not
-// marked as ghosts) are refused by the scan where a tetrahedron lies on the
-// boundary of both, naming it and the two pieces.
+// skipped, so pieces do not overlap. The scan refuses a piece whose own
+// tetrahedra overlap (check_tetrahedra in mesh_file.hpp: one listed twice,
+// an inverted one), tetrahedra of two pieces that lie on one side of the
+// face they share (a tangle across pieces), and pieces that overlap each
+// other (one listed twice or under two names, one inside another, each
+// holding the whole mesh, cells shared but not marked as ghosts) wherever a
+// tetrahedron on the boundary of one also lies on the other's boundary or
+// reaches inside it (pvtu_overlaps.hpp), naming it, its cell and both
+// pieces; pieces that overlap only where both are inside are not found.
+// Pieces that share no node id with the rest are read, with a note
+// (notes()). The in-situ call (tetiso/insitu.hpp) goes through the same
+// scan and checks (core/inputs/piece_tables.hpp), so it refuses the same pieces.
 //
 // Solvers write a shared node from every rank that holds it, and its
 // coordinates and values need not carry the same bits in each: a shared node
@@ -38,6 +46,10 @@
 #include "tetiso/partition.hpp"
 
 namespace tetiso {
+
+namespace detail {
+class PieceTables;
+}
 
 // The pieces a .pvtu lists (paths resolved against its directory) and the
 // name of the array its PPointData marks as global ids (empty if none).
@@ -67,11 +79,9 @@ public:
                            const RankGroup& group = {});
     ~PvtuPartition() override;
 
-    int domain_count() const override { return static_cast<int>(source_id_.size()); }
-    const std::vector<int>& neighbours(int domain) const override {
-        return neighbours_.at(static_cast<std::size_t>(domain));
-    }
-    const std::vector<DomainTreeNode>& tree() const override { return tree_; }
+    int domain_count() const override;
+    const std::vector<int>& neighbours(int domain) const override;
+    const std::vector<DomainTreeNode>& tree() const override;
     // For an edge two or more pieces share; empty for any other (a job asks
     // only about locked vertices, which lie on shared edges).
     std::vector<int> domains_of_edge(GlobalId a, GlobalId b) const override;
@@ -79,13 +89,19 @@ public:
     Domain make_domain(int domain) const override;
     bool pieces_are_manifold() const override { return false; }
     std::string domain_name(int domain) const override;
-    double spacing() const override { return spacing_; }
-    std::int64_t node_count() const override { return node_count_; }
-    std::int64_t tet_count() const override { return tet_count_; }
+    double spacing() const override;
+    std::int64_t node_count() const override;
+    std::int64_t tet_count() const override;
     std::uint64_t fingerprint() const override { return fingerprint_; }
 
+    // What was read but is likely not meant, each also printed on stderr as
+    // "tetiso: note: TEXT" by rank 0 of the group: pieces that fall into
+    // groups sharing no node id (a mesh of several bodies, or ids that are
+    // not global), whose surfaces are then not joined.
+    const std::vector<std::string>& notes() const;
+
     // The .pvtu's own index of `domain`'s piece.
-    int source_id(int domain) const { return source_id_.at(static_cast<std::size_t>(domain)); }
+    int source_id(int domain) const;
     const std::filesystem::path& piece_path(int domain) const;
 
 private:
@@ -93,20 +109,9 @@ private:
     MeshSource source_;
     std::string ids_name_;
     std::vector<std::filesystem::path> pieces_;
-    std::vector<std::uint64_t> piece_digests_;
-    std::vector<int> source_id_;
-    std::vector<DomainTreeNode> tree_;
-    std::vector<std::vector<int>> neighbours_;
-    // Edges held by several pieces, by key, with their domains (sorted).
-    std::vector<EdgeKey> shared_keys_;
-    std::vector<std::int64_t> shared_first_;
-    std::vector<int> shared_domains_;
-    // Nodes held by several pieces, by id, with the position they take.
-    std::vector<GlobalId> shared_nodes_;
-    std::vector<float> shared_xyz_;
-    std::vector<float> shared_f_; // and the value it takes (of source.array)
-    double spacing_ = 0;
-    std::int64_t node_count_ = 0, tet_count_ = 0;
+    // The domains, shared nodes and edges, tree and spacing the pieces'
+    // scans gave (core/inputs/piece_tables.hpp, shared with the in-situ route).
+    std::unique_ptr<detail::PieceTables> tables_;
     std::uint64_t fingerprint_ = 0;
 };
 

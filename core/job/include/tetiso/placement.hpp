@@ -5,7 +5,12 @@
 // Units. The CPU counts worker processes, one per task. A GPU counts task
 // slots, one: each GPU is driven by one process of its node, which keeps the
 // device's context, compiled kernels and buffers from one task to the next,
-// and runs its tasks one after another. Processes that each open a context on
+// and runs its grants one after another. A grant on a GPU carries a batch of
+// domain tasks (run_domain_tasks reduces them side by side): at most
+// --gpu-batch, as many as the GPU's memory holds by the estimate below, and
+// no more than half the GPUs' share of the domains still waiting, so that
+// the batches shrink at the end of the queue, every GPU gets some and
+// pieces keep coming back for the seams. Processes that each open a context on
 // one GPU pay its set-up each, and their kernels are time-sliced, not run
 // side by side; one task at a time in one context is the fastest way to share
 // a GPU and the safe one: its memory holds one task's buffers. The memory a
@@ -32,6 +37,8 @@ inline constexpr double kGpuContextMiB = 512;
 // The share of a GPU's memory a task may plan on: the rest is left to the
 // driver and to other users of the device.
 inline constexpr double kGpuUsableShare = 0.95;
+// The most domain tasks of one GPU grant unless --gpu-batch says otherwise.
+inline constexpr int kDefaultGpuBatch = 32;
 
 // The memory of CUDA device `gpu` in MiB, from gpu_info(); 0 where unknown.
 double gpu_memory_mib(int gpu);
@@ -47,18 +54,27 @@ public:
                   bool domains_on_cpu = true);
 
     // The request a task makes: a domain task one CPU process or one slot on
-    // any GPU whose memory holds it; a seam one CPU process. Throws
-    // tetiso::Error when a domain may run on a GPU only and fits none.
-    ResourceRequest request(int task, const Piece* left, const Piece* right) const;
+    // any GPU whose memory holds it, where it may come with up to
+    // min(most_in_batch, batch_limit()) - 1 more domain tasks; a seam one
+    // CPU process. Throws tetiso::Error when a domain may run on a GPU only
+    // and fits none.
+    ResourceRequest request(int task, const Piece* left, const Piece* right, int most_in_batch = 1) const;
+
+    // The most domain tasks a GPU grant may carry: --gpu-batch, and what the
+    // GPU's memory holds by the estimate (at least 1).
+    int batch_limit() const { return batch_limit_; }
 
     // Tells the manager that the task of `grant` ended: it took `seconds` in
     // all, of which the record's upload and download were transfer, which the
     // manager learns apart from the device's time. The record gets the
     // grant's prediction.
     void finish(const Grant& grant, double seconds, TaskRecord& record);
+    // The same for a grant's batch, which took `seconds` in all: each record
+    // gets its share of the prediction.
+    void finish(const Grant& grant, double seconds, std::vector<TaskRecord*> records);
 
-    // The GPUs a node's tasks may use, of the `count` it has: every one
-    // under --device auto, the one --gpu names under --device gpu.
+    // The GPUs a node's tasks may use, of the `count` it has: every one,
+    // or under --device gpu the one --gpu names where it names one.
     static std::vector<int> usable_gpus(const JobConfig& config, int count);
 
     // The CUDA index of a manager's device, -1 for the CPU.
@@ -72,6 +88,7 @@ private:
     double task_mib_;   // a domain task's estimated device memory
     double usable_mib_; // a GPU's memory less its context and a margin
     bool domains_on_cpu_;
+    int batch_limit_;
 };
 
 } // namespace tetiso

@@ -16,6 +16,17 @@
 // a grant only starts (start()) when its units are free now, whatever was
 // predicted.
 //
+// Batches. A request may let a device take up to k tasks like it at once
+// (a GPU reduces several domains side by side): on such a device the grant
+// carries the most tasks c <= k whose batch, of c times the size, ends no
+// later than the request would end on a device that takes one task alone,
+// so that a device that finishes a task first still gets it; where no such
+// device can hold the request, c = k; while the device's model of the task
+// is not calibrated and the task could run alone elsewhere, c = 1. The
+// models learn the batch's time as
+// a function of its size; until a device's model has seen two sizes, a
+// batch is assumed to take as long as its tasks one after another.
+//
 // Pure and clock-injected: the caller says what time it is, so that tests
 // drive it with a simulated clock and the MPI controller with its own.
 #pragma once
@@ -42,6 +53,8 @@ public:
     void add(double size, double seconds);
     std::optional<double> predict(double size) const;
     int samples() const { return samples_; }
+    // The different sizes among the samples.
+    std::size_t sizes() const { return by_size_.size(); }
 
 private:
     struct History {
@@ -71,13 +84,17 @@ struct ResourceRequest {
     // Units needed on each device, in the manager's device order; a value
     // <= 0 means the task cannot run there.
     std::vector<double> units;
+    // The most tasks like this one a device may take in one grant, in the
+    // manager's device order; missing or below 2: one.
+    std::vector<int> batch = {};
 };
 
 struct Grant {
     int ticket = -1;
     int device = -1;             // index into the manager's devices
     double start = 0;            // t_b: when the device admits the request
-    double predicted_seconds = 0; // τ on that device
+    double predicted_seconds = 0; // τ on that device, for the whole batch
+    int count = 1;               // tasks the grant carries (ResourceRequest::batch)
 };
 
 class ResourceManager {
@@ -136,6 +153,9 @@ private:
     // the model's prediction, and where the model has too few samples, at
     // least as long as any task of its kind has been running there.
     double expected_seconds(const ResourceRequest& request, int device, double now) const;
+    // Where and when `request` (one task, or `count` as a batch) would run
+    // on `device`.
+    Grant candidate(const ResourceRequest& request, int device, int count, double now) const;
     // When device `d` could admit `units` for `seconds`, at `now` or later.
     double admission_time(int device, double units, double seconds, double now) const;
     double units_booked_at(int device, double time, double now) const;

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "tetiso/device.hpp"
+#include "tetiso/domain_task.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/mesh.hpp"
 #include "tetiso/partition.hpp"
@@ -67,7 +68,13 @@ struct JobConfig {
     // first (resources.hpp). The surface is the same bytes either way.
     enum class Device { cpu, gpu, automatic };
     Device device = Device::cpu;
-    int gpu = 0;
+    // Under --device gpu: the one GPU of each node to use; -1: every GPU of
+    // each node (one process drives each), and GPU 0 where a task runs
+    // outside a node's placement.
+    int gpu = -1;
+    // The most domain tasks a GPU grant carries (placement.hpp); 0: the
+    // default, kDefaultGpuBatch. 1: one task at a time.
+    int gpu_batch = 0;
     // The shortest deadline a task of an MPI job gets, in seconds: a task
     // that has not ended max(this, 10 x its predicted seconds) after it was
     // sent (no deadline before some task has ended) names its rank as
@@ -186,8 +193,17 @@ public:
     virtual Piece execute(int task, const Piece* left, const Piece* right, TaskRecord& record,
                           const TaskThreads& threads) const;
 
-    // Makes this process's Device for CUDA device `gpu` and runs a small domain
-    // on it, so that the context, the kernels' loading and the first
+    // Runs several domain tasks in one call on GPU `threads.gpu` (or the
+    // job's device): run_domain_tasks reduces them side by side. Pieces and
+    // records in the order of `tasks`, each what execute() gives for the
+    // task alone; each record's seconds are its share of the batch's. Where
+    // the batch throws, each task is run alone to find the one that fails,
+    // which a BatchTaskError names.
+    std::vector<Piece> execute_batch(const std::vector<int>& tasks, std::vector<TaskRecord>& records,
+                                     const TaskThreads& threads) const;
+
+    // Makes this process's Device for CUDA device `gpu` and runs a small
+    // batch of two domains on it, so that the context, the kernels' loading and the first
     // allocations are paid before the job's first task there (a GPU's
     // driving process does this at start-up: the first task would otherwise
     // take seconds and teach the resource manager that the GPU is slow).
@@ -204,6 +220,11 @@ private:
 
     // CUDA device `index` of this process's node, made at its first use.
     const Device& gpu(int index) const;
+    // Where a domain task runs (-1: the CPU), its options, and the samples
+    // its piece keeps.
+    int gpu_of(const TaskThreads& threads) const;
+    DomainTaskOptions domain_options(const TaskThreads& threads) const;
+    void keep_samples(DomainTaskResult& done) const;
 
     JobConfig config_;
     std::unique_ptr<Partition> partition_;
@@ -284,6 +305,12 @@ public:
 private:
     bool active_ = false;
     int rank_ = 0, size_ = 1;
+};
+
+// A task of a batch (Job::execute_batch) that failed, and why.
+struct BatchTaskError : std::runtime_error {
+    BatchTaskError(int failed_task, const std::string& what) : std::runtime_error(what), task(failed_task) {}
+    int task;
 };
 
 // Thrown on worker ranks when the job ended because of a failure elsewhere;

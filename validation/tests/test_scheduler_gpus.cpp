@@ -1,0 +1,258 @@
+// The scheduler with GPUs, on the simulated clock of scheduler_fakes.hpp:
+// drivers run their GPUs' tasks and neither lend nor borrow cores; --device
+// gpu sends every domain to a driver; a GPU's grant carries a batch of
+// domain tasks, every GPU gets some, the batches shrink at the end of the
+// queue, the CPU keeps domains under auto; a failure inside a batch names
+// its task; Job::execute_batch gives each task's piece alone.
+#include <gtest/gtest.h>
+
+#include "scheduler_fakes.hpp"
+
+using namespace tetiso;
+using namespace tetiso::scheduler_test;
+
+TEST(Scheduler, GpuDriversRunTheirGpusTasksAndNeitherLendNorBorrow) {
+    JobConfig config = lattice_job(12, 27);
+    config.device = JobConfig::Device::automatic;
+    const Job job(config);
+    // One node: rank 0 and workers 1-3; rank 1 drives GPU 0.
+    NodeLayout nodes;
+    nodes.node_of = {0, 0, 0, 0};
+    nodes.driving = {-1, 0, -1, -1};
+    nodes.workers = {3};
+    nodes.gpus = {{0}};
+    nodes.gpu_mib = {80000};
+    SchedulerSetup setup = mpi_setup(4);
+    setup.nodes = nodes;
+    FakeTransport transport(job, {1, 2, 3}, true);
+    // The GPU is fast: once calibrated, it gets most domains.
+    transport.duration = [](int, int worker) { return worker == 1 ? 0.1 : 1.0; };
+    Scheduler scheduler(job, setup);
+    ASSERT_TRUE(scheduler.places_tasks());
+    const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.1));
+    ASSERT_TRUE(result.has_value());
+    int on_gpu = 0;
+    for (const FakeTransport::Sent& s : transport.sent) {
+        if (s.worker == 1) {
+            EXPECT_EQ(s.gpu, 0) << "the driver runs its GPU's tasks only";
+            EXPECT_EQ(job.kind(s.task), TaskKind::domain);
+            ++on_gpu;
+        } else {
+            EXPECT_EQ(s.gpu, -1) << "task " << s.task << " for a GPU went to rank " << s.worker;
+        }
+    }
+    // Ten times faster, the GPU ends most domains first even behind a queue:
+    // their grants wait for the driver rather than go to an idle CPU worker.
+    EXPECT_GT(on_gpu, 27 / 2) << "of 27 domains";
+    // No rank ever holds two tasks.
+    std::map<int, std::vector<std::pair<double, double>>> spans;
+    for (const TaskRecord& r : result->tasks) spans[r.rank].push_back({r.start, r.end});
+    for (auto& [rank, s] : spans) {
+        std::sort(s.begin(), s.end());
+        for (std::size_t i = 1; i < s.size(); ++i) EXPECT_LE(s[i - 1].second, s[i].first + 1e-9) << "rank " << rank;
+    }
+    for (const FakeTransport::Lent& l : transport.lent) {
+        EXPECT_NE(l.lender, 1);
+        EXPECT_NE(l.borrower, 1);
+    }
+    // Every task a worker ran was placed, with a prediction.
+    for (const TaskRecord& r : result->tasks)
+        if (r.rank != 0) {
+            EXPECT_GT(r.predicted_seconds, 0) << job.describe(r.task);
+        }
+}
+
+TEST(Scheduler, DeviceGpuSendsEveryDomainToADriverAndRefusesWhatNoGpuHolds) {
+    JobConfig config = lattice_job(12, 8);
+    NodeLayout nodes;
+    nodes.node_of = {0, 0, 0};
+    nodes.driving = {-1, 0, -1};
+    nodes.workers = {2};
+    nodes.gpus = {{0}};
+    nodes.gpu_mib = {80000};
+    // Job's constructor checks --device gpu against this machine's GPU: the
+    // layout is what says the node has one here.
+    Job job(config);
+    const_cast<JobConfig&>(job.config()).device = JobConfig::Device::gpu;
+    SchedulerSetup setup = mpi_setup(3);
+    setup.nodes = nodes;
+    {
+        FakeTransport transport(job, {1, 2}, false);
+        Scheduler scheduler(job, setup);
+        ASSERT_TRUE(drive(job, scheduler, transport, hooks_here(transport, job, 0.1)).has_value());
+        for (const FakeTransport::Sent& s : transport.sent)
+            EXPECT_EQ(s.worker == 1, job.kind(s.task) == TaskKind::domain) << job.describe(s.task);
+    }
+    // A GPU too small for a domain: the first request fails the job on rank 0.
+    setup.nodes->gpu_mib = {100};
+    FakeTransport transport(job, {1, 2}, false);
+    Scheduler scheduler(job, setup);
+    EXPECT_FALSE(drive(job, scheduler, transport, hooks_here(transport, job, 0.1)).has_value());
+    ASSERT_TRUE(scheduler.failure().has_value());
+    EXPECT_EQ(scheduler.failure()->rank, 0);
+    EXPECT_NE(scheduler.failure()->what.find("MiB of GPU memory"), std::string::npos) << scheduler.failure()->what;
+    EXPECT_TRUE(transport.sent.empty());
+}
+
+TEST(Scheduler, UnderDeviceGpuEveryGpuGetsBatchesThatShrinkAtTheEnd) {
+    JobConfig config = lattice_job(24, 64);
+    config.gpu_batch = 8;
+    Job job(config);
+    const_cast<JobConfig&>(job.config()).device = JobConfig::Device::gpu;
+    const int domains = domain_count_of(job);
+    FakeTransport transport(job, {1, 2, 3, 4}, true);
+    transport.duration = [](int, int worker) { return worker <= 2 ? 0.05 : 1.0; };
+    Scheduler scheduler(job, two_gpus_setup());
+    const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.1));
+    ASSERT_TRUE(result.has_value());
+    EXPECT_EQ(result->tasks.size(), static_cast<std::size_t>(job.task_count()));
+    // Every domain task went to a GPU's driver once, with that GPU.
+    std::map<int, int> domains_on; // driver -> domain tasks
+    std::set<int> seen;
+    for (const FakeTransport::Sent& s : transport.sent) {
+        if (job.kind(s.task) != TaskKind::domain) continue;
+        ASSERT_TRUE(s.worker == 1 || s.worker == 2) << job.describe(s.task) << " went to rank " << s.worker;
+        EXPECT_EQ(s.gpu, s.worker - 1);
+        EXPECT_TRUE(seen.insert(s.task).second) << job.describe(s.task) << " was sent twice";
+        ++domains_on[s.worker];
+    }
+    EXPECT_EQ(static_cast<int>(seen.size()), domains);
+    EXPECT_GT(domains_on[1], 0);
+    EXPECT_GT(domains_on[2], 0);
+    // Batches: at most --gpu-batch, at most half of each GPU's share of the
+    // domains not sent yet (two GPUs share them), full while many wait,
+    // smaller at the end.
+    ASSERT_FALSE(transport.batches.empty());
+    for (const FakeTransport::Batch& b : transport.batches) {
+        int waiting = domains;
+        for (std::size_t i = 0; i < b.sent_before; ++i) waiting -= job.kind(transport.sent[i].task) == TaskKind::domain;
+        EXPECT_LE(b.tasks.size(), 8u);
+        EXPECT_LE(static_cast<int>(b.tasks.size()), (waiting + 3) / 4) << waiting << " domains waited";
+        for (const int t : b.tasks) EXPECT_EQ(job.kind(t), TaskKind::domain);
+    }
+    EXPECT_EQ(transport.batches.front().tasks.size(), 8u);
+    // The last domain sent: alone, or in a batch smaller than the first.
+    std::size_t last_domain = 0;
+    for (std::size_t i = 0; i < transport.sent.size(); ++i)
+        if (job.kind(transport.sent[i].task) == TaskKind::domain) last_domain = i;
+    int last_grant = 1;
+    for (const FakeTransport::Batch& b : transport.batches)
+        if (b.sent_before <= last_domain && last_domain < b.sent_before + b.tasks.size())
+            last_grant = static_cast<int>(b.tasks.size());
+    EXPECT_LT(last_grant, 8);
+    // The records stay per task, end to end within each batch: no rank
+    // holds two tasks at once.
+    std::map<int, std::vector<std::pair<double, double>>> spans;
+    for (const TaskRecord& r : result->tasks) spans[r.rank].push_back({r.start, r.end});
+    for (auto& [rank, span] : spans) {
+        std::sort(span.begin(), span.end());
+        for (std::size_t i = 1; i < span.size(); ++i) EXPECT_LE(span[i - 1].second, span[i].first + 1e-9) << "rank " << rank;
+    }
+}
+
+TEST(Scheduler, UnderAutoTheCpuKeepsDomainsAndTheGpusTakeBatches) {
+    JobConfig config = lattice_job(24, 64);
+    config.device = JobConfig::Device::automatic;
+    const Job job(config);
+    FakeTransport transport(job, {1, 2, 3, 4}, true);
+    // Per task, the GPUs are ten times faster than a CPU worker; a batch
+    // takes the sum of its tasks.
+    transport.duration = [](int, int worker) { return worker <= 2 ? 0.1 : 1.0; };
+    Scheduler scheduler(job, two_gpus_setup());
+    const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.1));
+    ASSERT_TRUE(result.has_value());
+    int on_cpu = 0;
+    for (const FakeTransport::Sent& s : transport.sent)
+        if (job.kind(s.task) == TaskKind::domain && s.worker > 2) ++on_cpu;
+    EXPECT_GT(on_cpu, 0) << "the CPU finishes some domains first";
+    std::set<int> batched_on;
+    std::size_t largest = 0;
+    for (const FakeTransport::Batch& b : transport.batches) {
+        batched_on.insert(b.worker);
+        largest = std::max(largest, b.tasks.size());
+    }
+    EXPECT_EQ(batched_on, (std::set<int>{1, 2}));
+    EXPECT_GT(largest, 1u);
+    // Each GPU record carries its share of its batch's prediction.
+    for (const TaskRecord& r : result->tasks)
+        if (r.rank == 1 || r.rank == 2) {
+            EXPECT_GT(r.predicted_seconds, 0) << job.describe(r.task);
+        }
+}
+
+TEST(Scheduler, AFailureInsideABatchNamesItsTask) {
+    JobConfig config = lattice_job(24, 64);
+    config.gpu_batch = 8;
+    Job job(config);
+    const_cast<JobConfig&>(job.config()).device = JobConfig::Device::gpu;
+    // The third domain in queue order: inside the first batch, not its first.
+    std::vector<int> order = queue_order(job, job.task_count());
+    order.erase(std::remove_if(order.begin(), order.end(), [&](int t) { return job.kind(t) != TaskKind::domain; }),
+                order.end());
+    const int failing = order[2];
+    FakeTransport transport(job, {1, 2, 3, 4}, true);
+    transport.failing = {failing};
+    Scheduler scheduler(job, two_gpus_setup());
+    EXPECT_FALSE(drive(job, scheduler, transport, hooks_here(transport, job, 0.1)).has_value());
+    ASSERT_TRUE(scheduler.failure().has_value());
+    EXPECT_EQ(scheduler.failure()->task, failing);
+    EXPECT_EQ(scheduler.failure()->what, "injected");
+    ASSERT_FALSE(transport.batches.empty());
+    const FakeTransport::Batch& first = transport.batches.front();
+    EXPECT_GT(first.tasks.size(), 2u);
+    EXPECT_EQ(first.tasks[2], failing);
+    EXPECT_EQ(scheduler.failure()->rank, first.worker);
+    EXPECT_EQ(transport.stops, std::vector<bool>{true});
+}
+
+// Job::execute_batch: each piece and record what the task alone gives, and
+// a failing task named, the first that fails in the batch's order.
+TEST(Scheduler, ABatchIsEachTaskAloneAndItsFailureNamesTheTask) {
+    const Job job(lattice_job(20, 8));
+    std::vector<int> tasks;
+    for (int t = job.task_count() - 1; t >= 0; --t)
+        if (job.kind(t) == TaskKind::domain) tasks.push_back(t); // not in queue order
+    std::vector<TaskRecord> records;
+    const std::vector<Piece> pieces = job.execute_batch(tasks, records, TaskThreads{1, {}, {}});
+    ASSERT_EQ(pieces.size(), tasks.size());
+    ASSERT_EQ(records.size(), tasks.size());
+    for (std::size_t i = 0; i < tasks.size(); ++i) {
+        TaskRecord alone;
+        const Piece piece = job.execute(tasks[i], nullptr, nullptr, alone, TaskThreads{1, {}, {}});
+        EXPECT_TRUE(same_surface(pieces[i], piece)) << job.describe(tasks[i]);
+        EXPECT_EQ(records[i].task, tasks[i]);
+        EXPECT_EQ(records[i].triangles_in, alone.triangles_in);
+        EXPECT_EQ(records[i].triangles_out, alone.triangles_out);
+        EXPECT_EQ(records[i].samples_out, alone.samples_out);
+    }
+    EXPECT_THROW(job.execute_batch({0}, records, TaskThreads{1, {}, {}}), Error) << "a seam is no domain task";
+
+    // A field that is not finite where x < 2: the domains there fail.
+    JobConfig config = lattice_job(20, 8);
+    config.field = "sqrt(x - 2)";
+    config.level = 0.5;
+    const Job partly(config);
+    std::vector<int> fine, failing;
+    std::map<int, std::string> why;
+    for (const int t : tasks) {
+        TaskRecord alone;
+        try {
+            partly.execute(t, nullptr, nullptr, alone, TaskThreads{1, {}, {}});
+            fine.push_back(t);
+        } catch (const Error& e) {
+            failing.push_back(t);
+            why[t] = e.what();
+        }
+    }
+    ASSERT_FALSE(fine.empty());
+    ASSERT_GE(failing.size(), 2u);
+    const std::vector<int> batch{fine[0], failing[1], failing[0]};
+    try {
+        partly.execute_batch(batch, records, TaskThreads{1, {}, {}});
+        ADD_FAILURE() << "the batch did not fail";
+    } catch (const BatchTaskError& e) {
+        EXPECT_EQ(e.task, failing[1]);
+        EXPECT_EQ(std::string(e.what()), why[failing[1]]);
+    }
+}
+
