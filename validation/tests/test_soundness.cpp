@@ -280,7 +280,9 @@ TEST(ContactTest, PiecesOfABatchAreNotJudgedAgainstEachOther) {
         EXPECT_TRUE(test::same_piece(inner_alone, batched[1])) << threads << " threads";
         const Piece together = reduce(both, options);
         EXPECT_GT(together.triangle_count(), outer_alone.triangle_count() + inner_alone.triangle_count());
-        if (have_self_intersections()) EXPECT_EQ(violations(together), "");
+        if (have_self_intersections()) {
+            EXPECT_EQ(violations(together), "");
+        }
     }
 }
 

@@ -26,9 +26,10 @@
 
 namespace tetiso::reduction {
 
-// A triangle whose bounding box covers more cells than this goes to one
-// bucket of its own that every query reads (few do: the cell is as large as
-// nine in ten of the round's triangles).
+// A triangle whose cells span more than two per axis goes into the bucket
+// of every cell it covers, or, past this many, into one bucket of its own
+// that every query reads (few do: a cell is at least as large as nine in
+// ten of the round's triangles).
 constexpr int kMaxCellsPerTriangle = 27;
 // A query spanning more cells than this reads every triangle instead: the
 // answer must not depend on the cell size, which a batch of pieces
@@ -40,37 +41,6 @@ constexpr i64 kCellLimit = i64{1} << 20;
 // Distances below this many units in the last place of the coordinates count
 // as contact: rounding decides nothing.
 constexpr double kContactUlps = 16.0;
-
-struct ContactGridView {
-    const i32* first;      // per bucket, its first entry (groups + 2 entries)
-    const i32* order;      // entries grouped by bucket
-    const i32* entry_tri;  // per entry, its triangle: the surface's, then from nt on the obstacles
-    const float* obstacle; // 9 floats per obstacle (ReduceOptions::obstacles)
-    const i32* vertex_piece; // a batch's piece of each vertex (batch.hpp); null for one piece
-    i32 nt;                // the surface's triangles
-    i32 groups;            // buckets of cells (a power of two); bucket `groups` holds the large triangles
-    double inv_cell;       // 1 / cell size (a power of two)
-    bool on;
-
-    // Corner c of grid triangle t (a surface triangle, or an obstacle).
-    TETISO_HD Vec corner(const SurfaceView& s, i32 t, int c) const {
-        if (t < nt) return s.pos(s.tri[3 * t + c]);
-        const float* q = obstacle + 9 * static_cast<std::size_t>(t - nt) + 3 * c;
-        return {q[0], q[1], q[2]};
-    }
-
-    TETISO_HD i64 cell(double x) const {
-        const double c = std::floor(x * inv_cell);
-        return c < -static_cast<double>(kCellLimit) ? -kCellLimit
-               : c > static_cast<double>(kCellLimit - 1) ? kCellLimit - 1
-                                                         : static_cast<i64>(c);
-    }
-    TETISO_HD i32 bucket(i64 ix, i64 iy, i64 iz) const {
-        const u64 packed = (static_cast<u64>(ix + kCellLimit) << 42) | (static_cast<u64>(iy + kCellLimit) << 21) |
-                           static_cast<u64>(iz + kCellLimit);
-        return static_cast<i32>(mix64(packed) & static_cast<u64>(groups - 1));
-    }
-};
 
 struct Box {
     Vec lo, hi;
@@ -92,30 +62,104 @@ TETISO_HD inline Box box_of(Vec a, Vec b, Vec c) {
     return box;
 }
 
-TETISO_HD inline Box triangle_box(const ContactGridView& g, const SurfaceView& s, i32 t) {
-    return box_of(g.corner(s, t, 0), g.corner(s, t, 1), g.corner(s, t, 2));
-}
+// A triangle's box in its own float coordinates (min and max are exact).
+struct FloatBox {
+    float lo[3], hi[3];
+    TETISO_HD Box box() const { return {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}}; }
+};
+
+// A triangle as the queries read it, copied into its bucket's run so that a
+// query reads memory in order: its vertices (-2 for an obstacle's corners,
+// which are no vertices of the piece) and its corners' positions.
+struct ContactTriangle {
+    i32 id[3];
+    float at[9];
+    TETISO_HD Vec corner(int c) const { return {at[3 * c], at[3 * c + 1], at[3 * c + 2]}; }
+    TETISO_HD bool obstacle() const { return id[0] == -2; }
+    TETISO_HD FloatBox box() const {
+        FloatBox b;
+        for (int a = 0; a < 3; ++a) {
+            b.lo[a] = std::min(at[a], std::min(at[3 + a], at[6 + a]));
+            b.hi[a] = std::max(at[a], std::max(at[3 + a], at[6 + a]));
+        }
+        return b;
+    }
+};
+
+struct ContactGridView {
+    const i32* first;                  // per bucket, its first triangle (groups + 2 entries)
+    const FloatBox* boxes;             // grouped by bucket: what a query reads first
+    const ContactTriangle* triangles;  // grouped by bucket
+    const i32* vertex_piece;           // a batch's piece of each vertex (batch.hpp); null for one piece
+    i32 groups;                        // buckets of cells (a power of two); bucket `groups` holds the large triangles
+    double inv_cell;                   // 1 / cell size (a power of two)
+    bool on;
+
+    TETISO_HD i64 cell(double x) const {
+        const double c = std::floor(x * inv_cell);
+        return c < -static_cast<double>(kCellLimit) ? -kCellLimit
+               : c > static_cast<double>(kCellLimit - 1) ? kCellLimit - 1
+                                                         : static_cast<i64>(c);
+    }
+    TETISO_HD i32 bucket(i64 ix, i64 iy, i64 iz) const {
+        const u64 packed = (static_cast<u64>(ix + kCellLimit) << 42) | (static_cast<u64>(iy + kCellLimit) << 21) |
+                           static_cast<u64>(iz + kCellLimit);
+        return static_cast<i32>(mix64(packed) & static_cast<u64>(groups - 1));
+    }
+};
 
 // The cells a box covers, per axis (inclusive ranges), and their number.
 struct CellRange {
     i64 lo[3], hi[3];
     TETISO_HD i64 count() const { return (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1); }
+    // Whether the box spans at most two cells per axis: such a triangle
+    // goes into the bucket of its lowest cell only.
+    TETISO_HD bool small() const { return hi[0] - lo[0] <= 1 && hi[1] - lo[1] <= 1 && hi[2] - lo[2] <= 1; }
 };
-TETISO_HD inline CellRange cells_of(const ContactGridView& g, const Box& box, double margin) {
-    return {{g.cell(box.lo.x - margin), g.cell(box.lo.y - margin), g.cell(box.lo.z - margin)},
-            {g.cell(box.hi.x + margin), g.cell(box.hi.y + margin), g.cell(box.hi.z + margin)}};
+TETISO_HD inline CellRange cells_of(const ContactGridView& g, const Box& box) {
+    return {{g.cell(box.lo.x), g.cell(box.lo.y), g.cell(box.lo.z)},
+            {g.cell(box.hi.x), g.cell(box.hi.y), g.cell(box.hi.z)}};
 }
 
+// Triangle t of the grid: the surface's, then from nt on the obstacles (9
+// floats each).
+struct GridSource {
+    SurfaceView s;
+    const float* obstacle;
+    TETISO_HD ContactTriangle operator()(i32 t) const {
+        ContactTriangle c;
+        if (t < s.nt) {
+            for (int k = 0; k < 3; ++k) {
+                const i32 v = s.tri[3 * t + k];
+                const Vec q = s.pos(v);
+                c.id[k] = v;
+                c.at[3 * k] = static_cast<float>(q.x);
+                c.at[3 * k + 1] = static_cast<float>(q.y);
+                c.at[3 * k + 2] = static_cast<float>(q.z);
+            }
+            return c;
+        }
+        const float* q = obstacle + 9 * static_cast<std::size_t>(t - s.nt);
+        for (int k = 0; k < 3; ++k) c.id[k] = -2;
+        for (int k = 0; k < 9; ++k) c.at[k] = q[k];
+        return c;
+    }
+};
+
 // A triangle's histogram bin: the float exponent of its box's extent.
-TETISO_HD inline i32 extent_bin(const ContactGridView& g, const SurfaceView& s, i32 t) {
-    const float e = static_cast<float>(triangle_box(g, s, t).extent());
+TETISO_HD inline i32 extent_bin(const FloatBox& box) {
+    const float e = static_cast<float>(box.box().extent());
     u32 b;
     std::memcpy(&b, &e, sizeof b);
     return static_cast<i32>((b >> 23) & 0xff);
 }
 
-TETISO_HD inline u32 entries_of(const ContactGridView& g, const SurfaceView& s, i32 t) {
-    const i64 n = cells_of(g, triangle_box(g, s, t), 0.0).count();
+// How many buckets a triangle goes into: one for a small one (its lowest
+// cell) or a large one (the bucket of its own), else one per cell.
+TETISO_HD inline u32 entries_of(const ContactGridView& g, const FloatBox& box) {
+    const CellRange r = cells_of(g, box.box());
+    if (r.small()) return 1u;
+    const i64 n = r.count();
     return n > kMaxCellsPerTriangle ? 1u : static_cast<u32>(n);
 }
 
@@ -125,9 +169,11 @@ struct ContactGrid {
     using Array = typename Exec::template Array<T>;
     Array<i32> histogram, entry_tri, entry_bucket, first, order, scratch;
     Array<u32> offsets;
+    Array<FloatBox> box, entry_box;
+    Array<ContactTriangle> triangles;
     Array<float> obstacle;
     i32 obstacles = 0;
-    ContactGridView grid{nullptr, nullptr, nullptr, nullptr, nullptr, 0, 0, 0.0, false};
+    ContactGridView grid{nullptr, nullptr, nullptr, nullptr, 0, 0.0, false};
 
     ContactGridView view() const { return grid; }
 };
@@ -144,18 +190,25 @@ void load_obstacles(Exec& exec, const std::vector<float>& obstacles, ContactGrid
 
 // Builds the round's grid: the cell is the power of two at or above the
 // extent of nine in ten triangles (a histogram of their float exponents:
-// integer counts), each triangle goes into the bucket of every cell its box
-// covers.
+// integer counts); a triangle spanning at most two cells per axis goes into
+// the bucket of its lowest cell, so that a query reads one cell more below
+// its box; a larger one into the bucket of every cell it covers. Then the
+// triangles are copied into their buckets' runs.
 template <class Exec>
 void build_contact_grid(Exec& exec, const SurfaceView& s, const i32* vertex_piece, ContactGrid<Exec>& cg) {
     cg.grid.on = false;
     const i64 total = static_cast<i64>(s.nt) + cg.obstacles;
     if (s.nt == 0) return;
-    ContactGridView g{nullptr, nullptr,      nullptr, cg.obstacles > 0 ? cg.obstacle.data() : nullptr,
-                      vertex_piece, s.nt, 1,   1.0,     true};
+    const GridSource source{s, cg.obstacles > 0 ? cg.obstacle.data() : nullptr};
+    ContactGridView g{nullptr, nullptr, nullptr, vertex_piece, 1, 1.0, true};
     exec.assign(cg.histogram, kExtentBins, i32{0});
     i32* histogram = cg.histogram.data();
-    exec.for_each(total, [=] TETISO_HD(i64 t) { hd::atomic_add(histogram + extent_bin(g, s, static_cast<i32>(t)), 1); });
+    cg.box.resize(static_cast<std::size_t>(total));
+    FloatBox* box = cg.box.data();
+    exec.for_each(total, [=] TETISO_HD(i64 t) {
+        box[t] = source(static_cast<i32>(t)).box();
+        hd::atomic_add(histogram + extent_bin(box[t]), 1);
+    });
     std::vector<i32> counts;
     exec.download(cg.histogram, kExtentBins, counts);
     i64 seen = 0;
@@ -168,8 +221,8 @@ void build_contact_grid(Exec& exec, const SurfaceView& s, const i32* vertex_piec
     // no smaller than 2^-100 (a surface of zero-extent triangles).
     const int exponent = std::max(bin - 126, -100);
     g.inv_cell = std::ldexp(1.0, -exponent);
-    const u64 entries = exec.exclusive_sum(total, [=] TETISO_HD(i64 t) { return entries_of(g, s, static_cast<i32>(t)); },
-                                           cg.offsets);
+    const u64 entries = exec.exclusive_sum(
+        total, [=] TETISO_HD(i64 t) { return entries_of(g, box[t]); }, cg.offsets);
     i32 groups = 1;
     while (static_cast<u64>(groups) < entries && groups < (1 << 30)) groups *= 2;
     g.groups = groups;
@@ -181,7 +234,12 @@ void build_contact_grid(Exec& exec, const SurfaceView& s, const i32* vertex_piec
     exec.for_each(total, [=] TETISO_HD(i64 ti) {
         const i32 t = static_cast<i32>(ti);
         u32 at = offsets[t];
-        const CellRange r = cells_of(g, triangle_box(g, s, t), 0.0);
+        const CellRange r = cells_of(g, box[t].box());
+        if (r.small()) {
+            entry_tri[at] = t;
+            entry_bucket[at] = g.bucket(r.lo[0], r.lo[1], r.lo[2]);
+            return;
+        }
         if (r.count() > kMaxCellsPerTriangle) {
             entry_tri[at] = t;
             entry_bucket[at] = g.groups;
@@ -197,9 +255,19 @@ void build_contact_grid(Exec& exec, const SurfaceView& s, const i32* vertex_piec
     const i32* bucket_of = entry_bucket;
     exec.group_by_key(static_cast<i64>(entries), static_cast<i64>(groups) + 1,
                       [=] TETISO_HD(i64 i) { return bucket_of[i]; }, cg.first, cg.order, cg.scratch);
+    cg.triangles.resize(static_cast<std::size_t>(entries));
+    cg.entry_box.resize(static_cast<std::size_t>(entries));
+    ContactTriangle* triangles = cg.triangles.data();
+    FloatBox* entry_box = cg.entry_box.data();
+    const i32* order = cg.order.data();
+    exec.for_each(static_cast<i64>(entries), [=] TETISO_HD(i64 k) {
+        const i32 t = entry_tri[order[k]];
+        triangles[k] = source(t);
+        entry_box[k] = box[t];
+    });
     g.first = cg.first.data();
-    g.order = cg.order.data();
-    g.entry_tri = entry_tri;
+    g.boxes = entry_box;
+    g.triangles = triangles;
     cg.grid = g;
 }
 
@@ -248,14 +316,23 @@ TETISO_HD inline bool segment_meets(Vec a, Vec b, Vec c, Vec n, Vec q0, Vec q1, 
 // Whether triangles p and q, which share no corner, meet or come within a
 // few units in the last place of their coordinates (contact that rounding
 // would decide). A degenerate one (zero area: a segment or a point) meets
-// the other where one of its sides does.
-TETISO_HD inline bool triangles_meet(Vec p0, Vec p1, Vec p2, Vec q0, Vec q1, Vec q2) {
-    Vec np, nq;
-    const bool p_flat = !(quality(p0, p1, p2, &np) > 0), q_flat = !(quality(q0, q1, q2, &nq) > 0);
+// the other where one of its sides does. np: p's unit normal as quality()
+// gives it (zero when p is degenerate), which the caller often has.
+TETISO_HD inline bool triangles_meet(Vec p0, Vec p1, Vec p2, Vec np, Vec q0, Vec q1, Vec q2) {
     double extent = 0.0;
     for (const Vec v : {p0, p1, p2, q0, q1, q2})
         extent = std::max(extent, std::max(std::abs(v.x), std::max(std::abs(v.y), std::abs(v.z))));
     const double eps = kContactUlps * std::numeric_limits<float>::epsilon() * extent;
+    const bool p_flat = !(norm2(np) > 0);
+    if (!p_flat) {
+        // q wholly on one side of p's plane, farther than eps: none of q's
+        // sides comes near p (segment_meets below, which would measure the
+        // same distances), nor does any point of that plane come near q.
+        const double d0 = dot(q0 - p0, np), d1 = dot(q1 - p0, np), d2 = dot(q2 - p0, np);
+        if ((d0 > eps && d1 > eps && d2 > eps) || (d0 < -eps && d1 < -eps && d2 < -eps)) return false;
+    }
+    Vec nq;
+    const bool q_flat = !(quality(q0, q1, q2, &nq) > 0);
     if (p_flat && q_flat) {
         const Vec p[3] = {p0, p1, p2}, q[3] = {q0, q1, q2};
         for (int i = 0; i < 3; ++i)
@@ -269,27 +346,61 @@ TETISO_HD inline bool triangles_meet(Vec p0, Vec p1, Vec p2, Vec q0, Vec q1, Vec
                         segment_meets(p0, p1, p2, np, q2, q0, eps)));
 }
 
-// Calls f(t) for every triangle in the cells around box (several times for
-// some, and for others beside them: f tests the boxes itself), until f
-// returns false; whether none did.
+TETISO_HD inline bool triangles_meet(Vec p0, Vec p1, Vec p2, Vec q0, Vec q1, Vec q2) {
+    Vec np;
+    quality(p0, p1, p2, &np);
+    return triangles_meet(p0, p1, p2, np, q0, q1, q2);
+}
+
+// Calls f(k) for every entry k (g.triangles[k], g.boxes[k]) whose triangle's
+// box comes within margin of box (and for some others beside it: f must not
+// depend on being called only for those), until f returns false; whether
+// none did.
 template <class F>
 TETISO_HD bool for_each_triangle_near(const ContactGridView& g, const Box& box, double margin, const F& f) {
-    const CellRange r = cells_of(g, box, margin);
-    if (r.count() > kMaxCellsPerQuery) {
-        for (i32 k = 0, end = g.first[g.groups + 1]; k < end; ++k)
-            if (!f(g.entry_tri[k])) return false;
-        return true;
-    }
-    const auto bucket_range = [&](i32 bucket) {
+    // The box widened by twice the margin, in float: rounding it (by half a
+    // float ulp) cannot leave out a triangle within margin of box.
+    const double reach = 2.0 * margin;
+    const Box wide{{box.lo.x - reach, box.lo.y - reach, box.lo.z - reach},
+                   {box.hi.x + reach, box.hi.y + reach, box.hi.z + reach}};
+    const float lo[3] = {static_cast<float>(wide.lo.x), static_cast<float>(wide.lo.y), static_cast<float>(wide.lo.z)};
+    const float hi[3] = {static_cast<float>(wide.hi.x), static_cast<float>(wide.hi.y), static_cast<float>(wide.hi.z)};
+    const auto near = [&](const FloatBox& t) {
+        return !(t.lo[0] > hi[0] || t.hi[0] < lo[0] || t.lo[1] > hi[1] || t.hi[1] < lo[1] || t.lo[2] > hi[2] ||
+                 t.hi[2] < lo[2]);
+    };
+    const auto run = [&](i32 bucket) {
         for (i32 k = g.first[bucket], end = g.first[bucket + 1]; k < end; ++k)
-            if (!f(g.entry_tri[g.order[k]])) return false;
+            if (near(g.boxes[k]) && !f(k)) return false;
         return true;
     };
-    if (!bucket_range(g.groups)) return false;
+    if (!run(g.groups)) return false;
+    // The cells around the widened box, and one cell more below: a small
+    // triangle sits in its lowest cell only.
+    CellRange r = cells_of(g, wide);
+    for (int a = 0; a < 3; ++a) r.lo[a] = std::max(r.lo[a] - 1, -kCellLimit);
+    if (r.count() > kMaxCellsPerQuery) {
+        for (i32 k = 0, end = g.first[g.groups]; k < end; ++k)
+            if (near(g.boxes[k]) && !f(k)) return false;
+        return true;
+    }
     for (i64 x = r.lo[0]; x <= r.hi[0]; ++x)
         for (i64 y = r.lo[1]; y <= r.hi[1]; ++y)
-            for (i64 z = r.lo[2]; z <= r.hi[2]; ++z)
-                if (!bucket_range(g.bucket(x, y, z))) return false;
+            for (i64 z = r.lo[2]; z <= r.hi[2]; ++z) {
+                const i32 bucket = g.bucket(x, y, z);
+                for (i32 k = g.first[bucket], end = g.first[bucket + 1]; k < end; ++k) {
+                    const FloatBox& b = g.boxes[k];
+                    if (!near(b)) continue;
+                    // A triangle in several cells is read once: at the first
+                    // of its cells that the query reads (its lowest cell, or
+                    // the query's, per axis). A small one is in one cell.
+                    const CellRange own = cells_of(g, b.box());
+                    if (std::max(own.lo[0], r.lo[0]) != x || std::max(own.lo[1], r.lo[1]) != y ||
+                        std::max(own.lo[2], r.lo[2]) != z)
+                        continue;
+                    if (!f(k)) return false;
+                }
+            }
     return true;
 }
 

@@ -337,10 +337,11 @@ TETISO_HD inline bool clear_of_neighbours(const RoundView& m, i32 u, i32 w, bool
 TETISO_HD inline bool same(Vec a, Vec b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
 
 // New face k of an operation: its corners' vertices (-1 for a collapse's new
-// vertex) and positions.
+// vertex), positions and unit normal (quality()'s; zero when degenerate).
 struct FaceCorners {
     i32 id[3];
     Vec at[3];
+    Vec n;
 };
 
 // faces: the number of new faces; face_at(k): new face k; replaced(x, y,
@@ -354,36 +355,54 @@ struct FaceCorners {
 template <class FaceAt, class Replaced, class HadMet>
 TETISO_HD bool clear_of_distant(const RoundView& m, i32 at, const Box& box, int faces, const FaceAt& face_at,
                                 const Replaced& replaced, const HadMet& had_met) {
-    if (!m.contact.on) return true;
-    const i32* vertex_piece = m.contact.vertex_piece;
+    const ContactGridView& g = m.contact;
+    if (!g.on) return true;
+    const i32* vertex_piece = g.vertex_piece;
     const i32 piece = vertex_piece ? vertex_piece[at] : 0;
     const double reach = std::max({std::abs(box.lo.x), std::abs(box.lo.y), std::abs(box.lo.z), std::abs(box.hi.x),
                                    std::abs(box.hi.y), std::abs(box.hi.z)});
     const double margin = kContactUlps * std::numeric_limits<float>::epsilon() * reach;
-    const ContactGridView& g = m.contact;
-    return for_each_triangle_near(g, box, margin, [&](i32 t) {
-        // An obstacle's corners are no vertices of the piece: shared, they
-        // are shared by position (a locked rim vertex keeps it bit for bit).
-        const bool surface = t < g.nt;
-        const i32 x = surface ? m.s.tri[3 * t] : -2, y = surface ? m.s.tri[3 * t + 1] : -2,
-                  z = surface ? m.s.tri[3 * t + 2] : -2;
-        if (surface && ((vertex_piece && vertex_piece[x] != piece) || replaced(x, y, z))) return true;
-        const Vec px = g.corner(m.s, t, 0), py = g.corner(m.s, t, 1), pz = g.corner(m.s, t, 2);
-        const Box tb = box_of(px, py, pz);
-        if (tb.apart(box, margin)) return true;
+    // The triangles near the box are gathered, a few dozen at a time, and
+    // each new face is then set against them: a face's corners and box are
+    // made once per batch rather than once per triangle.
+    constexpr int kBatch = 64;
+    i32 near[kBatch];
+    int count = 0;
+    const auto clear = [&] {
         for (int k = 0; k < faces; ++k) {
             const FaceCorners f = face_at(k);
-            bool shared = false;
-            for (int c = 0; c < 3; ++c) {
-                const i32 id = f.id[c];
-                const Vec a = f.at[c];
-                shared = shared || (surface ? id == x || id == y || id == z : same(a, px) || same(a, py) || same(a, pz));
+            const Box fb = box_of(f.at[0], f.at[1], f.at[2]);
+            for (int j = 0; j < count; ++j) {
+                const ContactTriangle& t = g.triangles[near[j]];
+                const bool surface = !t.obstacle();
+                const Box tb = g.boxes[near[j]].box();
+                if (fb.apart(tb, margin)) continue;
+                // An obstacle's corners are no vertices of the piece: shared,
+                // they are shared by position (a locked rim vertex keeps it
+                // bit for bit).
+                bool shared = false;
+                for (int c = 0; c < 3; ++c) {
+                    const i32 id = f.id[c];
+                    const Vec a = f.at[c];
+                    shared = shared || (surface ? id == t.id[0] || id == t.id[1] || id == t.id[2]
+                                                : same(a, t.corner(0)) || same(a, t.corner(1)) || same(a, t.corner(2)));
+                }
+                if (shared) continue;
+                const Vec px = t.corner(0), py = t.corner(1), pz = t.corner(2);
+                if (triangles_meet(f.at[0], f.at[1], f.at[2], f.n, px, py, pz) && !had_met(k, px, py, pz)) return false;
             }
-            if (shared || box_of(f.at[0], f.at[1], f.at[2]).apart(tb, margin)) continue;
-            if (triangles_meet(f.at[0], f.at[1], f.at[2], px, py, pz) && !had_met(k, px, py, pz)) return false;
         }
+        count = 0;
         return true;
-    });
+    };
+    return for_each_triangle_near(g, box, margin, [&](i32 e) {
+        const ContactTriangle& t = g.triangles[e];
+        if (!t.obstacle() && ((vertex_piece && vertex_piece[t.id[0]] != piece) || replaced(t.id[0], t.id[1], t.id[2])))
+            return true;
+        if (count == kBatch && !clear()) return false;
+        near[count++] = e;
+        return true;
+    }) && clear();
 }
 
 // A collapse's new faces against the faces near them; the faces around u and
@@ -396,7 +415,7 @@ TETISO_HD inline bool collapse_clear_of_distant(const RoundView& m, i32 u, i32 w
     }
     return clear_of_distant(
         m, u, box, fan.count,
-        [&](int f) { return FaceCorners{{-1, fan.ia[f], fan.ib[f]}, {fan.p, fan.a(f), fan.b(f)}}; },
+        [&](int f) { return FaceCorners{{-1, fan.ia[f], fan.ib[f]}, {fan.p, fan.a(f), fan.b(f)}, fan.n[f]}; },
         [&](i32 x, i32 y, i32 z) { return x == u || x == w || y == u || y == w || z == u || z == w; },
         [&](int f, Vec px, Vec py, Vec pz) {
             return triangles_meet(m.s.pos(fan.end[f]), fan.a(f), fan.b(f), px, py, pz);
@@ -651,7 +670,7 @@ TETISO_HD inline bool propose_flip(const RoundView& m, i32 e, const OpsView& ops
     // Nor through a face it shares no corner with.
     Box box{pu, pu};
     for (const Vec q : {pw, pc, pd}) box.add(q);
-    const FaceCorners made[2] = {{{c, u, d}, {pc, pu, pd}}, {{d, w, c}, {pd, pw, pc}}};
+    const FaceCorners made[2] = {{{c, u, d}, {pc, pu, pd}, n1}, {{d, w, c}, {pd, pw, pc}, n2}};
     const auto replaced = [&](i32 x, i32 y, i32 z) {
         return (x == u || y == u || z == u) && (x == w || y == w || z == w);
     };
