@@ -52,13 +52,19 @@ prepare() {
     du -sh "$dest/gpu_streams.tar.xz"
 }
 
-run() {
-    local dest=$1 out=$2 commit=$3 work
+# The packed programs unpacked into a new folder, named in $work, and the
+# environment they run in.
+unpack() {
     work=$(mktemp -d)
-    tar -C "$work" -xJf "$dest/gpu_streams.tar.xz"
-    mkdir -p "$out"
+    tar -C "$work" -xJf "$1/gpu_streams.tar.xz"
     export LD_LIBRARY_PATH=$work/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
     export OMP_WAIT_POLICY=passive
+}
+
+run() {
+    local dest=$1 out=$2 commit=$3 work
+    unpack "$dest"
+    mkdir -p "$out"
     local bin=$work/bin args=(--lattice=1000 --domains=1000 --count=64 --pick=spread)
     local machine
     machine=$(nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader | head -1)
@@ -103,11 +109,8 @@ run() {
 
 batch() {
     local dest=$1 out=$2 commit=$3 work
-    work=$(mktemp -d)
-    tar -C "$work" -xJf "$dest/gpu_streams.tar.xz"
+    unpack "$dest"
     mkdir -p "$out/raw"
-    export LD_LIBRARY_PATH=$work/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
-    export OMP_WAIT_POLICY=passive
     local bin=$work/bin args=(--lattice=1000 --domains=1000 --count=64 --pick=spread --streams=1,4 --batches=1,4,16,64)
     local machine
     machine=$(nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv,noheader | head -1)

@@ -18,6 +18,19 @@ std::string node_list(const std::array<GlobalId, 4>& ids) {
 
 constexpr const char* kGhostHint = ": pieces overlap (a cell two pieces hold must be a ghost, vtkGhostType, in all but one)";
 
+// Every piece's items, each with its piece's index, ordered by node ids and
+// then piece, so that items sharing ids lie side by side.
+template <class Item>
+std::vector<std::pair<Item, int>> by_ids(const std::vector<std::vector<Item>>& pieces) {
+    std::vector<std::pair<Item, int>> held;
+    for (std::size_t p = 0; p < pieces.size(); ++p)
+        for (const Item& item : pieces[p]) held.push_back({item, static_cast<int>(p)});
+    std::sort(held.begin(), held.end(), [](const auto& a, const auto& b) {
+        return std::tie(a.first.ids, a.second) < std::tie(b.first.ids, b.second);
+    });
+    return held;
+}
+
 } // namespace
 
 PieceInside piece_inside(const std::vector<std::int32_t>& tets, const std::vector<GlobalId>& ids,
@@ -80,12 +93,7 @@ BoundaryFace boundary_face(const std::int32_t* corners, const std::array<std::in
 
 void refuse_folds_between(const std::vector<std::vector<BoundaryFace>>& faces,
                           const std::vector<std::string>& names) {
-    std::vector<std::pair<BoundaryFace, int>> held;
-    for (std::size_t p = 0; p < faces.size(); ++p)
-        for (const BoundaryFace& face : faces[p]) held.push_back({face, static_cast<int>(p)});
-    std::sort(held.begin(), held.end(), [](const auto& a, const auto& b) {
-        return std::tie(a.first.ids, a.second) < std::tie(b.first.ids, b.second);
-    });
+    const std::vector<std::pair<BoundaryFace, int>> held = by_ids(faces);
     for (std::size_t i = 0; i < held.size();) {
         std::size_t j = i + 1;
         while (j < held.size() && held[j].first.ids == held[i].first.ids) ++j;
@@ -109,12 +117,7 @@ void refuse_folds_between(const std::vector<std::vector<BoundaryFace>>& faces,
 
 void refuse_shared_boundary_tets(const std::vector<std::vector<BoundaryTet>>& boundary,
                                  const std::vector<std::string>& names) {
-    std::vector<std::pair<BoundaryTet, int>> held;
-    for (std::size_t p = 0; p < boundary.size(); ++p)
-        for (const BoundaryTet& tet : boundary[p]) held.push_back({tet, static_cast<int>(p)});
-    std::sort(held.begin(), held.end(), [](const auto& a, const auto& b) {
-        return std::tie(a.first.ids, a.second) < std::tie(b.first.ids, b.second);
-    });
+    const std::vector<std::pair<BoundaryTet, int>> held = by_ids(boundary);
     for (std::size_t i = 1; i < held.size(); ++i)
         if (held[i].first == held[i - 1].first) {
             const auto& [tet, p] = held[i];

@@ -26,6 +26,7 @@ namespace {
 
 using test::extract_under_test;
 using test::lattice_surface;
+using test::error_of;
 
 TEST(Extract, SphereIsOneClosedOrientedGenusZeroComponentOfTheRightArea) {
     const Piece sphere = lattice_surface(100, 1, "sphere");
@@ -314,15 +315,6 @@ TEST(Extract, UnstructuredDomainsLockTheirSharedEdges) {
         }
     }
     EXPECT_GT(locked, 0u); // the interfaces were crossed
-}
-
-std::string error_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "(no error)";
 }
 
 // The element a bad domain's error names: the last node with a value that is

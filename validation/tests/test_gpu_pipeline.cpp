@@ -33,6 +33,7 @@ namespace {
 
 using test::same_piece;
 using test::the_gpu;
+using test::error_of;
 
 ReduceOptions domain_options(double spacing, double bound = 0.25) {
     ReduceOptions o;
@@ -56,15 +57,6 @@ Piece gpu_task(const LatticePartition& lattice, int domain, float level, const R
     task.device = the_gpu();
     task.reduce = o;
     return run_domain_task(lattice, domain, task).piece;
-}
-
-std::string error_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "(no error)";
 }
 
 struct LatticeCase {

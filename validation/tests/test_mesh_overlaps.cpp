@@ -23,15 +23,7 @@
 namespace tetiso {
 namespace {
 
-// What f throws, or "(no error)".
-std::string message(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "(no error)";
-}
+using test::error_of;
 
 // Points: a triangle in z = 0 and a point above it, one below, one higher.
 Domain points() {
@@ -48,7 +40,7 @@ Domain points() {
 std::string check(std::vector<std::int32_t> tets, const std::vector<std::uint64_t>& numbers = {}) {
     Domain d = points();
     d.tets = std::move(tets);
-    return message([&] { check_tetrahedra(d, "m.vtu", numbers, "cell"); });
+    return error_of([&] { check_tetrahedra(d, "m.vtu", numbers, "cell"); });
 }
 
 TEST(MeshOverlaps, TwoTetrahedraOnOneFaceMustLieOnEitherSide) {
@@ -70,7 +62,7 @@ TEST(MeshOverlaps, TwoTetrahedraOnOneFaceMustLieOnEitherSide) {
     Domain flat = points();
     flat.x.push_back(1), flat.y.push_back(1), flat.z.push_back(0), flat.f.push_back(0), flat.gid.push_back(6);
     flat.tets = {0, 1, 2, 6};
-    EXPECT_NE(message([&] { check_tetrahedra(flat, "m.vtu"); }).find("m.vtu: tetrahedron 0 has zero volume"),
+    EXPECT_NE(error_of([&] { check_tetrahedra(flat, "m.vtu"); }).find("m.vtu: tetrahedron 0 has zero volume"),
               std::string::npos);
 }
 
@@ -103,7 +95,7 @@ TEST(MeshOverlaps, AnInvertedTetrahedronIsNamedAgainstTheMeshsOrientation) {
     orient_tetrahedra(listed, "lattice"); // every tetrahedron now positive as listed
     {
         Domain copy = listed;
-        EXPECT_EQ(message([&] { check_tetrahedra(copy, "lattice"); }), "(no error)");
+        EXPECT_EQ(error_of([&] { check_tetrahedra(copy, "lattice"); }), "(no error)");
     }
     const auto moved = static_cast<std::size_t>(id(1, 1, 1));
     listed.x[moved] += 1.5f;
@@ -113,7 +105,7 @@ TEST(MeshOverlaps, AnInvertedTetrahedronIsNamedAgainstTheMeshsOrientation) {
         if (signed_volume6(listed, v[0], v[1], v[2], v[3]) < 0) inverted.push_back(t);
     }
     ASSERT_FALSE(inverted.empty());
-    const std::string what = message([&] { check_tetrahedra(listed, "lattice"); });
+    const std::string what = error_of([&] { check_tetrahedra(listed, "lattice"); });
     const std::size_t at = what.find(" is inverted: negatively oriented where the mesh's tetrahedra are positively");
     ASSERT_NE(at, std::string::npos) << what;
     const std::size_t named = std::stoul(what.substr(what.find("tetrahedron ") + 12));
@@ -190,7 +182,7 @@ std::vector<std::string> on_ranks(const MeshSource& source, int size) {
     std::vector<std::thread> threads;
     for (int r = 0; r < size; ++r)
         threads.emplace_back([&, r] {
-            errors[static_cast<std::size_t>(r)] = message([&] { PvtuPartition p(source, nullptr, ranks.group(r)); });
+            errors[static_cast<std::size_t>(r)] = error_of([&] { PvtuPartition p(source, nullptr, ranks.group(r)); });
         });
     for (std::thread& t : threads) t.join();
     return errors;
@@ -247,7 +239,7 @@ TEST(MeshOverlaps, PiecesThatFoldOverEachOtherAreRefused) {
                                                              {"b.vtu", piece({{0, 2, 1, 4}}, 0, true)}}),
                                               size))
             EXPECT_EQ(e, "(no error)");
-    const std::string what = message([&] {
+    const std::string what = error_of([&] {
         PvtuPartition p(pieces.source({{"a.vtu", piece({{0, 1, 2, 3}}, 0, true)}, {"b.vtu", piece({{0, 2, 1, 5}}, 0, true)}}));
     });
     EXPECT_EQ(what, pieces.scratch.at("b.vtu").string() + ": cell 0 lies on the same side of the face of node ids 0, 1, 2 as cell 0 of " +

@@ -37,6 +37,7 @@ namespace {
 using test::read_bytes;
 using test::same_bits;
 using test::same_surface;
+using test::error_of;
 
 const std::filesystem::path kSolver = std::filesystem::path(TETISO_MESHES_DIR) / "solver";
 constexpr float kLevel = 1.5f; // the point array `distance` at 1.5: a sphere
@@ -66,15 +67,6 @@ void expect_sphere(const Piece& surface) {
     EXPECT_EQ(report.euler, 2);
     EXPECT_EQ(report.degenerate_triangles, 0);
     EXPECT_EQ(report.misoriented_edges, 0);
-}
-
-std::string message(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const Error& e) {
-        return e.what();
-    }
-    return "(no error)";
 }
 
 TEST(SolverMeshes, EveryEncodingReadsToTheSameDomain) {
@@ -268,7 +260,7 @@ TEST(SolverMeshes, BadInputsAreOneErrorNamingTheFile) {
         scratch.write("damaged", damaged);
         const std::filesystem::path path = scratch.path(std::string("damaged") + std::filesystem::path(bad.file).extension().string());
         std::filesystem::rename(scratch.path("damaged"), path);
-        const std::string what = message([&] { read_cube(path); });
+        const std::string what = error_of([&] { read_cube(path); });
         EXPECT_EQ(what.rfind(path.string() + ": ", 0), 0u) << what;
         EXPECT_NE(what.find(bad.expected), std::string::npos) << what;
         EXPECT_EQ(what.find('\n'), std::string::npos) << what;
@@ -277,7 +269,7 @@ TEST(SolverMeshes, BadInputsAreOneErrorNamingTheFile) {
 
 // What building the partition of `source` throws, or "(no error)".
 std::string pvtu_error(const MeshSource& source) {
-    return message([&] { PvtuPartition pieces(source); });
+    return error_of([&] { PvtuPartition pieces(source); });
 }
 
 TEST(SolverMeshes, InconsistentPiecesAreRefusedByName) {
@@ -496,7 +488,7 @@ TEST(SolverMeshes, RanksShareTheScanAndAgree) {
     std::vector<std::string> errors(2);
     std::vector<std::thread> threads;
     for (int r = 0; r < 2; ++r)
-        threads.emplace_back([&, r] { errors[static_cast<std::size_t>(r)] = message([&] { PvtuPartition p(source, nullptr, ranks.group(r)); }); });
+        threads.emplace_back([&, r] { errors[static_cast<std::size_t>(r)] = error_of([&] { PvtuPartition p(source, nullptr, ranks.group(r)); }); });
     for (std::thread& t : threads) t.join();
     for (const std::string& e : errors) EXPECT_NE(e.find("pieces_2.vtu: cannot open"), std::string::npos) << e;
 }

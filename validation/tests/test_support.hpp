@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <string>
 #include <vector>
@@ -15,12 +16,23 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/seam.hpp"
 
 namespace tetiso::test {
+
+// What f throws as a tetiso::Error, or "(no error)".
+inline std::string error_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
 
 // The whole file as bytes (empty if it cannot be read).
 inline std::string read_bytes(const std::filesystem::path& path) {

@@ -254,6 +254,17 @@ TETISO_HD bool place_samples(const RoundView& m, const EdgeSlots& r, const NewFa
     return placed;
 }
 
+// Calls visit(sample, own_slot) for every sample of the faces of both leaves
+// of a collapse, in place_samples' order: own_slot is the slot of the face
+// it lies on, -1 where the collapse removes that face.
+template <class Visit>
+TETISO_HD void for_each_leaf_sample(const RoundView& m, const EdgeSlots& r, const Visit& visit) {
+    for_each_leaf_face(r, [&](i32 slot, bool removed) {
+        const FaceGeometry& g = m.geo[m.face(slot)];
+        for (i32 sample = g.samples_begin; sample < g.samples_end; ++sample) visit(sample, removed ? -1 : slot);
+    });
+}
+
 // How many samples the faces of both leaves of a collapse hold.
 TETISO_HD inline i32 leaf_sample_count(const RoundView& m, const EdgeSlots& r) {
     i32 count = 0;
@@ -271,41 +282,30 @@ struct LeafSamplePlacement {
     double bound;
 };
 
-// Sample j of the leaves of a collapse to p, counted in place_samples'
-// order, placed by itself: the same distances, compared in the same order,
-// as place_samples computes for it, so that placing the samples of one
-// collapse on as many threads gives place_samples' placements and, as the
-// largest of the bounds, its worst.
-TETISO_HD inline LeafSamplePlacement place_leaf_sample(const RoundView& m, const EdgeSlots& r, Vec p, i32 j) {
-    i32 sample = -1, own_slot = -1;
-    for_each_leaf_face(r, [&](i32 slot, bool removed) {
-        if (sample >= 0) return;
-        const FaceGeometry& g = m.geo[m.face(slot)];
-        const i32 count = g.samples_end - g.samples_begin;
-        if (j < count) {
-            sample = g.samples_begin + j;
-            own_slot = removed ? -1 : slot;
-        } else {
-            j -= count;
-        }
-    });
+// A sample of the leaves of collapse e to p (for_each_leaf_sample's sample
+// and own_slot), placed by itself: the same distances, compared in the same
+// order, as place_samples computes for it, so that placing the samples of
+// one collapse on as many threads gives place_samples' placements and, as
+// the largest of the bounds, its worst. In two steps: the face that
+// replaces its own (which keeps most samples), and only where that is too
+// far, the nearest new face.
+TETISO_HD inline bool place_on_own_face(const RoundView& m, Vec p, i32 sample, i32 own_slot,
+                                        LeafSamplePlacement& placed) {
+    if (own_slot < 0) return false;
+    const double d = sample_distance(m.samples, sample, p, m.s.pos(m.fans.next[own_slot]),
+                                     m.s.pos(m.fans.prev[own_slot]));
+    const double bound = m.samples.point[sample].base + d;
+    if (!(bound <= m.p.max_error)) return false;
+    placed = {sample, m.face(own_slot), bound};
+    return true;
+}
+TETISO_HD inline LeafSamplePlacement place_on_nearest_face(const RoundView& m, i32 e, Vec p, i32 sample) {
     const double base = m.samples.point[sample].base;
-    const auto corners = [&](i32 slot, Vec& a, Vec& b) {
-        a = m.s.pos(m.fans.next[slot]);
-        b = m.s.pos(m.fans.prev[slot]);
-    };
-    Vec a, b;
-    if (own_slot >= 0) {
-        corners(own_slot, a, b);
-        const double d = sample_distance(m.samples, sample, p, a, b);
-        if (base + d <= m.p.max_error) return {sample, m.face(own_slot), base + d};
-    }
     double d = std::numeric_limits<double>::infinity();
     i32 at = -1;
-    for_each_leaf_face(r, [&](i32 slot, bool removed) {
+    for_each_leaf_face(slots(m, e), [&](i32 slot, bool removed) {
         if (removed) return;
-        corners(slot, a, b);
-        const double df = sample_distance(m.samples, sample, p, a, b);
+        const double df = sample_distance(m.samples, sample, p, m.s.pos(m.fans.next[slot]), m.s.pos(m.fans.prev[slot]));
         if (df < d) {
             d = df;
             at = m.face(slot);

@@ -449,7 +449,7 @@ struct Placements {
 
 // owns(border_edge): whether the corners the collapse would own are its to
 // take, asked last, of a collapse that passed every other test. deferred:
-// where the samples are placed later, one by one (place_leaf_sample), this
+// where the samples are placed later, one by one (place_on_own_face), this
 // takes the bound they start from and the test places none (nor writes the
 // new faces' bound); null to place them here.
 // The tests of a placed collapse that read connectivity alone (the link

@@ -21,195 +21,12 @@
 
 #include <algorithm>
 #include <cstddef>
-#include <limits>
 
 #include "../hd.hpp"
-#include "legality.hpp"
-#include "round_view.hpp"
+#include "dry_run.hpp"
+#include "selection_state.hpp"
 
 namespace tetiso::reduction {
-
-// chosen[e]: 1 for a chosen operation.
-constexpr u8 kChosen = 1;
-
-// The reservations' window: at least kReservationWindowMin operations, or
-// 1/kReservationSteps of the round's on the host, so a round takes some tens
-// of steps of three parallel loops; with kReservationMin operations or fewer
-// the host sweeps on the calling thread. The device takes a window of every
-// operation (exec_cuda.cuh): the choice does not depend on the width.
-constexpr i64 kReservationWindowMin = 512;
-constexpr i64 kReservationSteps = 32;
-constexpr i64 kReservationMin = 256;
-constexpr u64 kNoReservation = std::numeric_limits<u64>::max();
-constexpr i32 kNoClaim = std::numeric_limits<i32>::max();
-
-// What became of an operation under speculation (choose_by_reservations),
-// by rank.
-constexpr u8 kOutcomeUndecided = 0, kOutcomeIllegal = 1, kOutcomeChosen = 2, kOutcomeBlockedByCorner = 3;
-
-// An operation in the reservations' window: its rank in the round's order,
-// the edge and its ends (read once, when it enters).
-struct WindowSlot {
-    i32 rank, e, u, w;
-    // -1 until computed. The corners themselves are found again when needed
-    // (few operations own any): stored here, they made the window four times
-    // larger, and the selection on several threads slower.
-    i32 owned_count;
-};
-
-// What the selection reads of the round, and its claims: claimed[v] ==
-// stamp means v lies within path length 1 of a chosen operation.
-struct SelectView {
-    FansView fans;
-    EdgesView edges;
-    const Cone* cones;
-    i32* claimed;
-    i32 stamp;
-
-    TETISO_HD void claim(i32 v) const { hd::atomic_store(claimed + v, stamp); }
-    TETISO_HD bool free(i32 v) const { return claimed[v] != stamp; }
-
-    // The vertices operation e touches: its ends, and for a flip both
-    // opposite vertices.
-    template <bool Flips>
-    TETISO_HD int touched(i32 e, i32 u, i32 w, i32* out) const {
-        out[0] = u;
-        out[1] = w;
-        if (!Flips) return 2;
-        const EdgeFaces f = edges.faces(fans, e);
-        out[2] = f.c;
-        out[3] = f.d;
-        return 4;
-    }
-    // A collapse's owned corners (owned_corners); flips own none (they are
-    // dropped where a cone does not decide).
-    template <bool Flips>
-    TETISO_HD int owned(i32 e, i32* out) const {
-        if (Flips) return 0;
-        const i32 u = edges.v0[e], w = edges.v1[e];
-        const bool border_edge = fans.border[u] && fans.border[w] && edges.border(fans, e);
-        return owned_corners(fans, cones, u, w, border_edge, out);
-    }
-    TETISO_HD bool all_free(const i32* vs, int n) const {
-        for (int k = 0; k < n; ++k)
-            if (!free(vs[k])) return false;
-        return true;
-    }
-    // Claims the closed 1-ring of every vertex chosen operation e touches and
-    // of every corner it owns; with claim_rank, also records there the
-    // lowest rank that claimed each vertex.
-    template <bool Flips>
-    TETISO_HD void claim_around(i32 e, i32* claim_rank = nullptr, i32 rank = 0) const {
-        i32 vs[4 + kMaxOwned];
-        int n = touched<Flips>(e, edges.v0[e], edges.v1[e], vs);
-        const int owned_n = owned<Flips>(e, vs + n);
-        n += owned_n > 0 ? owned_n : 0;
-        const auto mark = [&](i32 x) {
-            claim(x);
-            if (claim_rank) hd::atomic_min(claim_rank + x, rank);
-        };
-        for (int i = 0; i < n; ++i) {
-            mark(vs[i]);
-            for (i32 j = 0, m = fans.nn(vs[i]); j < m; ++j) mark(fans.nbr(vs[i], j));
-        }
-    }
-    // A window operation's touched vertices, then its owned corners.
-    template <bool Flips, class F>
-    TETISO_HD void for_each_footprint(const WindowSlot& slot, const F& f) const {
-        i32 vs[4];
-        const int n = touched<Flips>(slot.e, slot.u, slot.w, vs);
-        for (int k = 0; k < n; ++k) f(vs[k]);
-        if (slot.owned_count <= 0) return;
-        i32 owned_vs[kMaxOwned];
-        const int m = owned<Flips>(slot.e, owned_vs);
-        for (int k = 0; k < m; ++k) f(owned_vs[k]);
-    }
-};
-
-// The tests the selection asks: a collapse's legality (legality.hpp, which
-// also moves the samples of one it finds legal), or none for a flip, fully
-// tested when proposed.
-struct CollapseTest {
-    RoundView m;
-    OpsView ops;
-    i32* owner; // the samples' owners; null without samples
-    // Scratch arrays beside ops (the priorities are the round's, read only):
-    // where a dry run writes its proposal.
-    OpsView dry;
-    template <class FreeCorners>
-    TETISO_HD Verdict operator()(i32 e, const FreeCorners& free_corners) const {
-        return legal(m, e, ops, owner, free_corners);
-    }
-    // The verdict of the tests on the round's state, its corners taken as
-    // free, with nothing written that the round reads and the samples left
-    // for place() (their starting bound in *deferred), in two stages: the
-    // first places the collapse and runs the tests of connectivity (false:
-    // illegal); the second, only after a first that passed, the rest.
-    TETISO_HD bool dry_run_connectivity(i32 e) const {
-        dry.kind[e] = ops.kind[e];
-        dry.px[e] = ops.px[e];
-        dry.py[e] = ops.py[e];
-        dry.pz[e] = ops.pz[e];
-        dry.survivor[e] = ops.survivor[e];
-        const EdgeSlots r = slots(m, e);
-        if (dry.kind[e] == kPending && !place_collapse(m, r, dry, e)) return false;
-        return connectivity_allows(m, r, dry, e);
-    }
-    TETISO_HD Verdict dry_run_rest(i32 e, double* deferred) const {
-        return legal(m, e, dry, nullptr, [](const i32*, int) { return true; }, deferred);
-    }
-    TETISO_HD bool samples_on() const { return m.samples.on; }
-    TETISO_HD i32 leaf_samples(i32 e) const { return leaf_sample_count(m, slots(m, e)); }
-    // Sample j of the leaves of dry-run collapse e.
-    TETISO_HD LeafSamplePlacement place(i32 e, i32 j) const {
-        return place_leaf_sample(m, slots(m, e), {dry.px[e], dry.py[e], dry.pz[e]}, j);
-    }
-    // What the real test of e would have written of its proposal: the dry
-    // run's, with the new faces' bound where it chose e.
-    TETISO_HD void adopt(i32 e, bool chosen) const {
-        ops.kind[e] = dry.kind[e];
-        ops.px[e] = dry.px[e];
-        ops.py[e] = dry.py[e];
-        ops.pz[e] = dry.pz[e];
-        ops.survivor[e] = dry.survivor[e];
-        if (chosen) ops.err[e] = dry.err[e];
-    }
-};
-struct FlipTest {
-    template <class FreeCorners>
-    TETISO_HD Verdict operator()(i32, const FreeCorners&) const {
-        return Verdict::kLegal;
-    }
-};
-
-template <class Exec>
-struct Selection {
-    template <class T>
-    using Array = typename Exec::template Array<T>;
-    Array<i32> claimed, order;
-    Array<u64> reservation;
-    Array<i32> ends; // the sweep's operations' ends, in its order
-    Array<WindowSlot> window, waiting;
-    Array<u8> state;
-    Array<i64> held; // the sizes of window and waiting (choose_by_reservations)
-    // Speculation: each rank's outcome, the ranks of a list, and per vertex
-    // the lowest rank of a chosen operation that claimed it.
-    Array<u8> outcome;
-    Array<i32> entrants, claim_rank;
-    Array<i32> dry_survivors; // the ranks whose dry run passed its first stage
-    // The samples of the dry runs' leaves, one item each: per rank its
-    // first item and bound, per item the sample and where it goes.
-    Array<i32> sample_count, sample_first, item_sample, item_triangle;
-    Array<u64> worst_bits;
-    i32 items = 0;
-    bool speculate = !Exec::kHost;
-    i32 stamp = 0;
-    // Tests only: the reservations on one host thread too, with this window
-    // (0: the backend's), and speculate as chosen.
-    bool always_reservations = false;
-    i64 window_override = 0;
-    std::size_t steps = 0; // reservation steps since the counter was reset
-};
 
 // The sequential greedy choice on the host: operations in descending
 // priority, each taken when it is clear of those taken before and legal.
@@ -243,85 +60,6 @@ void choose_in_order(Selection<Exec>& sel, const SelectView& v, i32 n, u8* chose
         chosen[e] = kChosen;
         v.claim_around<Flips>(e);
     }
-}
-
-// The rank whose items (sample_first, an exclusive scan of n + 1 entries)
-// hold item.
-TETISO_HD inline i32 rank_of_item(const i32* first, i32 n, i32 item) {
-    i32 low = 0, high = n; // first[low] <= item < first[high]
-    while (high - low > 1) {
-        const i32 mid = low + (high - low) / 2;
-        if (first[mid] <= item) low = mid;
-        else high = mid;
-    }
-    return low;
-}
-
-// The counts of a round that CudaExec keeps on the device (the slots of
-// Exec::count_into, filter_into).
-// kTallyActive: the pieces of a batch not finished after the round.
-enum TallySlot : int { kTallyEvaluated, kTallyCollapses, kTallyFlips, kTallyChanged, kTallyDrySurvivors, kTallyActive };
-
-// Speculation's dry runs: every collapse of the round tested on its state,
-// its samples placed one a thread (the tests of a collapse are a few hundred
-// steps, its samples' placement as many again for each sample, which late
-// rounds have dozens of a face: on the GPU one thread placing them all
-// would be the round's slowest). outcome[rank]: kOutcomeUndecided where
-// legal, else kOutcomeIllegal; the dry proposal's bound in dry.err.
-template <class Exec, class Test>
-void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test) {
-    using Grain = typename Exec::Grain;
-    const i32* order = sel.order.data();
-    sel.outcome.resize(static_cast<std::size_t>(n));
-    u8* outcome = sel.outcome.data();
-    const bool samples = test.samples_on();
-    if (samples) {
-        sel.worst_bits.resize(static_cast<std::size_t>(n));
-        sel.sample_count.resize(static_cast<std::size_t>(n));
-    }
-    u64* worst = sel.worst_bits.data();
-    i32* count = sel.sample_count.data();
-    // In two stages, so that the geometric tests, long and with a large
-    // scratch each, run only for the collapses that pass the cheap ones,
-    // side by side (on the GPU, warps of collapses that all go on).
-    exec.for_each(n, [=] TETISO_HD(i64 k) {
-        const bool maybe = test.dry_run_connectivity(order[k]);
-        outcome[k] = maybe ? kOutcomeUndecided : kOutcomeIllegal;
-        if (!samples) return;
-        worst[k] = hd::bits(0.0);
-        count[k] = 0;
-    });
-    exec.filter_into(n, [=] TETISO_HD(i64 k) { return outcome[k] == kOutcomeUndecided; }, sel.dry_survivors,
-                     kTallyDrySurvivors);
-    const i32* survivors = sel.dry_survivors.data();
-    exec.for_each_of(exec.tally_at(kTallyDrySurvivors), n, [=] TETISO_HD(i64 j) {
-        const i32 k = survivors[j], e = order[k];
-        double deferred = 0.0;
-        const bool legal = test.dry_run_rest(e, samples ? &deferred : nullptr) == Verdict::kLegal;
-        outcome[k] = legal ? kOutcomeUndecided : kOutcomeIllegal;
-        if (!samples) return;
-        worst[k] = hd::bits(deferred);
-        count[k] = legal ? test.leaf_samples(e) : 0;
-    }, Grain::kTests);
-    sel.items = 0;
-    if (!samples) return;
-    sel.items = exec.exclusive_scan(sel.sample_count, n, sel.sample_first);
-    sel.item_sample.resize(static_cast<std::size_t>(sel.items));
-    sel.item_triangle.resize(static_cast<std::size_t>(sel.items));
-    const i32* first = sel.sample_first.data();
-    i32 *item_sample = sel.item_sample.data(), *item_triangle = sel.item_triangle.data();
-    exec.for_each(sel.items, [=] TETISO_HD(i64 item) {
-        const i32 k = rank_of_item(first, n, static_cast<i32>(item));
-        const LeafSamplePlacement placed = test.place(order[k], static_cast<i32>(item) - first[k]);
-        item_sample[item] = placed.sample;
-        item_triangle[item] = placed.triangle;
-        // Bounds are not negative: their bits order as they do.
-        if (placed.triangle < 0) hd::atomic_store(outcome + k, kOutcomeIllegal);
-        else hd::atomic_max(worst + k, hd::bits(placed.bound));
-    }, Grain::kTests);
-    exec.for_each(n, [=] TETISO_HD(i64 k) {
-        if (outcome[k] == kOutcomeUndecided) test.dry.err[order[k]] = static_cast<float>(hd::from_bits(worst[k]));
-    });
 }
 
 // The same sequential greedy choice by deterministic reservations:
@@ -526,12 +264,11 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
             test.adopt(e, what == kOutcomeChosen);
         });
         if (sel.items > 0 && test.samples_on()) {
-            const i32* first = sel.sample_first.data();
-            const i32 *item_sample = sel.item_sample.data(), *item_triangle = sel.item_triangle.data();
+            const i32 *item_rank = sel.item_rank.data(), *item_sample = sel.item_sample.data(),
+                      *item_triangle = sel.item_triangle.data();
             i32* owner = test.owner;
             exec.for_each(sel.items, [=] TETISO_HD(i64 item) {
-                if (outcome[rank_of_item(first, n, static_cast<i32>(item))] == kOutcomeChosen)
-                    owner[item_sample[item]] = item_triangle[item];
+                if (outcome[item_rank[item]] == kOutcomeChosen) owner[item_sample[item]] = item_triangle[item];
             });
         }
     }
