@@ -305,5 +305,35 @@ TEST(ContactTest, TrianglesThatShareNoCorner) {
     EXPECT_FALSE(triangles_meet(a, b, c, {2, 2, -1}, {3, 2, 1}, {2, 3, 1}));
 }
 
+// Two operations of one round, apart in the surface but close in space, each
+// see the round's start only: a sphere and a slightly turned copy just
+// inside it, reduced as one piece with a loose error bound, so that both
+// sheets collapse side by side in the same rounds, a few hundredths of an
+// edge apart. Their new faces are set against each other's.
+TEST(ContactTest, OperationsOfOneRoundAreJudgedAgainstEachOther) {
+    if (!have_self_intersections()) GTEST_SKIP() << "built without CGAL";
+    const Piece outer = reduce_cases::icosphere(4);
+    Piece both = outer;
+    const auto shift = static_cast<std::int32_t>(outer.vertex_count());
+    const double turn = 0.01, c = std::cos(turn), s = std::sin(turn);
+    for (std::size_t v = 0; v < outer.vertex_count(); ++v) {
+        const double x = outer.x[v], y = outer.y[v], z = outer.z[v];
+        both.x.push_back(static_cast<float>(0.995 * (c * x - s * y)));
+        both.y.push_back(static_cast<float>(0.995 * (s * x + c * y)));
+        both.z.push_back(static_cast<float>(0.995 * z));
+        both.key.push_back(outer.key[v] + outer.key.size());
+        both.flags.push_back(outer.flags[v]);
+    }
+    for (const std::int32_t v : outer.triangles) both.triangles.push_back(v + shift);
+    ASSERT_EQ(violations(both), "");
+    for (const int threads : {1, 2}) {
+        ReduceOptions options;
+        options.threads = threads;
+        options.phi = 0.5;
+        options.max_error = 0.2;
+        EXPECT_EQ(violations(reduce(both, options)), "") << threads << " threads";
+    }
+}
+
 } // namespace
 } // namespace tetiso

@@ -20,11 +20,10 @@
 // written in float32 (extract.hpp), the result is clean as written too: no
 // zero-area triangle, no two vertices at one position, no self-intersection;
 // legality is judged on the float positions that will be written. Each new
-// triangle is tested against every triangle of the round's start near it
-// (and against `obstacles`), not only those sharing a corner. Not tested:
-// the new triangles of two operations of one round against each other (each
-// sees the round's start), and triangles that are neither in the piece nor
-// in `obstacles`.
+// triangle is tested against every triangle near it, not only those sharing
+// a corner: the round's, the new ones of the operations chosen with it, and
+// `obstacles`. Not tested: triangles that are neither in the piece nor in
+// `obstacles`.
 #pragma once
 
 #include <cstddef>

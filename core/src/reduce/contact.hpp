@@ -1,14 +1,14 @@
-// Contact with faces that share no corner (legality.hpp's clear_of_distant):
-// the round's triangles bucketed by the cells of a uniform grid, so that an
-// operation's new faces are tested against every face of the round's start
-// near them, not only against the faces around their corners. Where the
-// surface folds back close to itself (two sheets of one component a few
-// faces apart, a border running past a sheet) a collapse whose faces each
-// turn by little can still carry its fan through a face it shares nothing
-// with; the soundness soak's reduced surfaces that crossed themselves
-// (results/soundness) were all of this kind.
+// Contact with faces that share no corner (contact_filter.hpp): the round's
+// triangles, and the faces its chosen operations make, bucketed by the cells
+// of a uniform grid, so that an operation's new faces are tested against
+// every face near them, not only against the faces around their corners.
+// Where the surface folds back close to itself (two sheets of one component
+// a few faces apart, a border running past a sheet) a collapse whose faces
+// each turn by little can still carry its fan through a face it shares
+// nothing with; the soundness soak's reduced surfaces that crossed
+// themselves (results/soundness) were all of this kind.
 //
-// The grid is rebuilt each round from the positions alone, with integer
+// The grid is built each round from the positions alone, with integer
 // counts and the Exec primitives only (exclusive_sum, group_by_key), so it is
 // the same on every backend and thread count; the tests that read it are
 // per-element functions on float positions in double precision.
@@ -70,12 +70,16 @@ struct FloatBox {
 
 // A triangle as the queries read it, copied into its bucket's run so that a
 // query reads memory in order: its vertices (-2 for an obstacle's corners,
-// which are no vertices of the piece) and its corners' positions.
+// which are no vertices of the piece; -3 for a collapse's new vertex), its
+// corners' positions, and for a face a chosen operation makes, that
+// operation's edge (op; -1 for the round's own faces and the obstacles).
 struct ContactTriangle {
     i32 id[3];
     float at[9];
+    i32 op;
     TETISO_HD Vec corner(int c) const { return {at[3 * c], at[3 * c + 1], at[3 * c + 2]}; }
     TETISO_HD bool obstacle() const { return id[0] == -2; }
+    TETISO_HD bool made() const { return op >= 0; }
     TETISO_HD FloatBox box() const {
         FloatBox b;
         for (int a = 0; a < 3; ++a) {
@@ -122,12 +126,15 @@ TETISO_HD inline CellRange cells_of(const ContactGridView& g, const Box& box) {
 }
 
 // Triangle t of the grid: the surface's, then from nt on the obstacles (9
-// floats each).
+// floats each), then the faces the round's chosen operations make.
 struct GridSource {
     SurfaceView s;
     const float* obstacle;
+    i32 obstacles;
+    const ContactTriangle* made;
     TETISO_HD ContactTriangle operator()(i32 t) const {
         ContactTriangle c;
+        c.op = -1;
         if (t < s.nt) {
             for (int k = 0; k < 3; ++k) {
                 const i32 v = s.tri[3 * t + k];
@@ -139,6 +146,7 @@ struct GridSource {
             }
             return c;
         }
+        if (t >= s.nt + obstacles) return made[t - s.nt - obstacles];
         const float* q = obstacle + 9 * static_cast<std::size_t>(t - s.nt);
         for (int k = 0; k < 3; ++k) c.id[k] = -2;
         for (int k = 0; k < 9; ++k) c.at[k] = q[k];
@@ -170,7 +178,7 @@ struct ContactGrid {
     Array<i32> histogram, entry_tri, entry_bucket, first, order, scratch;
     Array<u32> offsets;
     Array<FloatBox> box, entry_box;
-    Array<ContactTriangle> triangles;
+    Array<ContactTriangle> triangles, made;
     Array<float> obstacle;
     i32 obstacles = 0;
     ContactGridView grid{nullptr, nullptr, nullptr, nullptr, 0, 0.0, false};
@@ -188,18 +196,20 @@ void load_obstacles(Exec& exec, const std::vector<float>& obstacles, ContactGrid
     exec.upload(obstacles, cg.obstacle);
 }
 
-// Builds the round's grid: the cell is the power of two at or above the
+// Builds the grid of the round's faces, the obstacles and the first `made`
+// faces of cg.made: the cell is the power of two at or above the
 // extent of nine in ten triangles (a histogram of their float exponents:
 // integer counts); a triangle spanning at most two cells per axis goes into
 // the bucket of its lowest cell, so that a query reads one cell more below
 // its box; a larger one into the bucket of every cell it covers. Then the
 // triangles are copied into their buckets' runs.
 template <class Exec>
-void build_contact_grid(Exec& exec, const SurfaceView& s, const i32* vertex_piece, ContactGrid<Exec>& cg) {
+void build_contact_grid(Exec& exec, const SurfaceView& s, const i32* vertex_piece, i32 made, ContactGrid<Exec>& cg) {
     cg.grid.on = false;
-    const i64 total = static_cast<i64>(s.nt) + cg.obstacles;
+    const i64 total = static_cast<i64>(s.nt) + cg.obstacles + made;
     if (s.nt == 0) return;
-    const GridSource source{s, cg.obstacles > 0 ? cg.obstacle.data() : nullptr};
+    const GridSource source{s, cg.obstacles > 0 ? cg.obstacle.data() : nullptr, cg.obstacles,
+                            made > 0 ? cg.made.data() : nullptr};
     ContactGridView g{nullptr, nullptr, nullptr, vertex_piece, 1, 1.0, true};
     exec.assign(cg.histogram, kExtentBins, i32{0});
     i32* histogram = cg.histogram.data();
@@ -333,6 +343,10 @@ TETISO_HD inline bool triangles_meet(Vec p0, Vec p1, Vec p2, Vec np, Vec q0, Vec
     }
     Vec nq;
     const bool q_flat = !(quality(q0, q1, q2, &nq) > 0);
+    if (!q_flat) { // and the same the other way
+        const double d0 = dot(p0 - q0, nq), d1 = dot(p1 - q0, nq), d2 = dot(p2 - q0, nq);
+        if ((d0 > eps && d1 > eps && d2 > eps) || (d0 < -eps && d1 < -eps && d2 < -eps)) return false;
+    }
     if (p_flat && q_flat) {
         const Vec p[3] = {p0, p1, p2}, q[3] = {q0, q1, q2};
         for (int i = 0; i < 3; ++i)
@@ -353,9 +367,9 @@ TETISO_HD inline bool triangles_meet(Vec p0, Vec p1, Vec p2, Vec q0, Vec q1, Vec
 }
 
 // Calls f(k) for every entry k (g.triangles[k], g.boxes[k]) whose triangle's
-// box comes within margin of box (and for some others beside it: f must not
-// depend on being called only for those), until f returns false; whether
-// none did.
+// box comes within margin of box (and for some others beside it, and for
+// some more than once: f must not depend on being called only once, only for
+// those), until f returns false; whether none did.
 template <class F>
 TETISO_HD bool for_each_triangle_near(const ContactGridView& g, const Box& box, double margin, const F& f) {
     // The box widened by twice the margin, in float: rounding it (by half a
@@ -384,23 +398,13 @@ TETISO_HD bool for_each_triangle_near(const ContactGridView& g, const Box& box, 
             if (near(g.boxes[k]) && !f(k)) return false;
         return true;
     }
+    // A triangle in several cells, or in a bucket that two of the query's
+    // cells share, is read more than once: rarer, and cheaper, than
+    // finding out.
     for (i64 x = r.lo[0]; x <= r.hi[0]; ++x)
         for (i64 y = r.lo[1]; y <= r.hi[1]; ++y)
-            for (i64 z = r.lo[2]; z <= r.hi[2]; ++z) {
-                const i32 bucket = g.bucket(x, y, z);
-                for (i32 k = g.first[bucket], end = g.first[bucket + 1]; k < end; ++k) {
-                    const FloatBox& b = g.boxes[k];
-                    if (!near(b)) continue;
-                    // A triangle in several cells is read once: at the first
-                    // of its cells that the query reads (its lowest cell, or
-                    // the query's, per axis). A small one is in one cell.
-                    const CellRange own = cells_of(g, b.box());
-                    if (std::max(own.lo[0], r.lo[0]) != x || std::max(own.lo[1], r.lo[1]) != y ||
-                        std::max(own.lo[2], r.lo[2]) != z)
-                        continue;
-                    if (!f(k)) return false;
-                }
-            }
+            for (i64 z = r.lo[2]; z <= r.hi[2]; ++z)
+                if (!run(g.bucket(x, y, z))) return false;
     return true;
 }
 

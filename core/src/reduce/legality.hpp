@@ -18,10 +18,9 @@
 //    and a valence-3 removal's one new face has no turn test;
 //  - no new contact: faces that share a corner meet nowhere else, among the
 //    new faces and between them and the faces around their outer corners
-//    (see Cones below); contacts the replaced faces had already do not count;
-//  - no contact with distant faces: every other face of the round's start
-//    near the new faces (contact.hpp's grid), and every obstacle, stays
-//    more than a few ulps from each of them (clear_of_distant);
+//    (see Cones below); contacts the replaced faces had already do not count
+//    (contact with faces that share no corner is judged once the round's
+//    operations are chosen: contact_filter.hpp);
 //  - error: the samples of every face of both leaves are re-measured against
 //    the new faces (error_bound.hpp); each must lie within max_error of one
 //    of them (less its own bound from earlier calls), and goes to it. The new
@@ -31,7 +30,6 @@
 #pragma once
 
 #include <algorithm>
-#include <limits>
 #include <utility>
 
 #include "../hd.hpp"
@@ -329,100 +327,6 @@ TETISO_HD inline bool clear_of_neighbours(const RoundView& m, i32 u, i32 w, bool
 }
 
 // ---------------------------------------------------------------------------
-// Contact between faces that share no corner (contact.hpp): every face of
-// the round's start near the new ones, other than those the operation
-// replaces and those around the new faces' own corners (the tests above),
-// must stay clear of them.
-
-TETISO_HD inline bool same(Vec a, Vec b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
-
-// New face k of an operation: its corners' vertices (-1 for a collapse's new
-// vertex), positions and unit normal (quality()'s; zero when degenerate).
-struct FaceCorners {
-    i32 id[3];
-    Vec at[3];
-    Vec n;
-};
-
-// faces: the number of new faces; face_at(k): new face k; replaced(x, y,
-// z): whether the face with these corners is one the operation removes or
-// rewrites; had_met(k, px, py, pz): whether the faces new face k replaces
-// met that triangle already (a contact the input had is no new one: where
-// extraction left coincident vertices, cleaning them up must stay
-// possible). box: holds every new face. at: a vertex of the operation,
-// whose piece is the only one its faces are judged against (the pieces of a
-// batch are separate surfaces, each reduced as it would be alone).
-template <class FaceAt, class Replaced, class HadMet>
-TETISO_HD bool clear_of_distant(const RoundView& m, i32 at, const Box& box, int faces, const FaceAt& face_at,
-                                const Replaced& replaced, const HadMet& had_met) {
-    const ContactGridView& g = m.contact;
-    if (!g.on) return true;
-    const i32* vertex_piece = g.vertex_piece;
-    const i32 piece = vertex_piece ? vertex_piece[at] : 0;
-    const double reach = std::max({std::abs(box.lo.x), std::abs(box.lo.y), std::abs(box.lo.z), std::abs(box.hi.x),
-                                   std::abs(box.hi.y), std::abs(box.hi.z)});
-    const double margin = kContactUlps * std::numeric_limits<float>::epsilon() * reach;
-    // The triangles near the box are gathered, a few dozen at a time, and
-    // each new face is then set against them: a face's corners and box are
-    // made once per batch rather than once per triangle.
-    constexpr int kBatch = 64;
-    i32 near[kBatch];
-    int count = 0;
-    const auto clear = [&] {
-        for (int k = 0; k < faces; ++k) {
-            const FaceCorners f = face_at(k);
-            const Box fb = box_of(f.at[0], f.at[1], f.at[2]);
-            for (int j = 0; j < count; ++j) {
-                const ContactTriangle& t = g.triangles[near[j]];
-                const bool surface = !t.obstacle();
-                const Box tb = g.boxes[near[j]].box();
-                if (fb.apart(tb, margin)) continue;
-                // An obstacle's corners are no vertices of the piece: shared,
-                // they are shared by position (a locked rim vertex keeps it
-                // bit for bit).
-                bool shared = false;
-                for (int c = 0; c < 3; ++c) {
-                    const i32 id = f.id[c];
-                    const Vec a = f.at[c];
-                    shared = shared || (surface ? id == t.id[0] || id == t.id[1] || id == t.id[2]
-                                                : same(a, t.corner(0)) || same(a, t.corner(1)) || same(a, t.corner(2)));
-                }
-                if (shared) continue;
-                const Vec px = t.corner(0), py = t.corner(1), pz = t.corner(2);
-                if (triangles_meet(f.at[0], f.at[1], f.at[2], f.n, px, py, pz) && !had_met(k, px, py, pz)) return false;
-            }
-        }
-        count = 0;
-        return true;
-    };
-    return for_each_triangle_near(g, box, margin, [&](i32 e) {
-        const ContactTriangle& t = g.triangles[e];
-        if (!t.obstacle() && ((vertex_piece && vertex_piece[t.id[0]] != piece) || replaced(t.id[0], t.id[1], t.id[2])))
-            return true;
-        if (count == kBatch && !clear()) return false;
-        near[count++] = e;
-        return true;
-    }) && clear();
-}
-
-// A collapse's new faces against the faces near them; the faces around u and
-// w are the ones it replaces.
-TETISO_HD inline bool collapse_clear_of_distant(const RoundView& m, i32 u, i32 w, const NewFan& fan) {
-    Box box{fan.p, fan.p};
-    for (int f = 0; f < fan.count; ++f) {
-        box.add(fan.a(f));
-        box.add(fan.b(f));
-    }
-    return clear_of_distant(
-        m, u, box, fan.count,
-        [&](int f) { return FaceCorners{{-1, fan.ia[f], fan.ib[f]}, {fan.p, fan.a(f), fan.b(f)}, fan.n[f]}; },
-        [&](i32 x, i32 y, i32 z) { return x == u || x == w || y == u || y == w || z == u || z == w; },
-        [&](int f, Vec px, Vec py, Vec pz) {
-            return triangles_meet(m.s.pos(fan.end[f]), fan.a(f), fan.b(f), px, py, pz);
-        });
-}
-
-// ---------------------------------------------------------------------------
 // Collapses.
 
 // Where a legal collapse's samples go: kept until the collapse knows it
@@ -571,9 +475,7 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
     if (spoiled || faces > NewFan::kMax) return false;
     fan.count = faces;
     if (!m.samples.on) {
-        if (!clear_of_neighbours(m, u, w, border_edge, fan) || !collapse_clear_of_distant(m, u, w, fan) ||
-            !owns(border_edge))
-            return false;
+        if (!clear_of_neighbours(m, u, w, border_edge, fan) || !owns(border_edge)) return false;
         ops.err[i] = static_cast<float>(err_old + increment);
         return true;
     }
@@ -582,9 +484,7 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
     double worst = border_edge ? err_old + increment : 0.0;
     if (worst > m.p.max_error) return false;
     if (deferred) {
-        if (!clear_of_neighbours(m, u, w, border_edge, fan) || !collapse_clear_of_distant(m, u, w, fan) ||
-            !owns(border_edge))
-            return false;
+        if (!clear_of_neighbours(m, u, w, border_edge, fan) || !owns(border_edge)) return false;
         *deferred = worst;
         return true;
     }
@@ -592,9 +492,7 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
     // fails half way must leave the owners as they were.
     Placements placed;
     if (!place_samples(m, r, fan, worst, [&](i32 sample, i32 t) { placed.add(sample, t); })) return false;
-    if (!clear_of_neighbours(m, u, w, border_edge, fan) || !collapse_clear_of_distant(m, u, w, fan) ||
-        !owns(border_edge))
-        return false;
+    if (!clear_of_neighbours(m, u, w, border_edge, fan) || !owns(border_edge)) return false;
     if (owner) {
         if (!placed.overflow) {
             for (int k = 0; k < placed.count; ++k) owner[placed.sample[k]] = placed.triangle[k];
@@ -667,17 +565,6 @@ TETISO_HD inline bool propose_flip(const RoundView& m, i32 e, const OpsView& ops
     if (!inside_cone(m, u, n1) || !inside_cone(m, c, n1) || !inside_cone(m, d, n1) || !inside_cone(m, w, n2) ||
         !inside_cone(m, c, n2) || !inside_cone(m, d, n2))
         return false;
-    // Nor through a face it shares no corner with.
-    Box box{pu, pu};
-    for (const Vec q : {pw, pc, pd}) box.add(q);
-    const FaceCorners made[2] = {{{c, u, d}, {pc, pu, pd}, n1}, {{d, w, c}, {pd, pw, pc}, n2}};
-    const auto replaced = [&](i32 x, i32 y, i32 z) {
-        return (x == u || y == u || z == u) && (x == w || y == w || z == w);
-    };
-    const auto had_met = [&](int, Vec px, Vec py, Vec pz) {
-        return triangles_meet(pu, pw, pc, px, py, pz) || triangles_meet(pw, pu, pd, px, py, pz);
-    };
-    if (!clear_of_distant(m, u, box, 2, [&](int k) { return made[k]; }, replaced, had_met)) return false;
     // Error: the gap between the two diagonals.
     const Vec axis = cross(pw - pu, pd - pc);
     const double axis_len = norm(axis);

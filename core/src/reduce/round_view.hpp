@@ -6,7 +6,6 @@
 #pragma once
 
 #include "adjacency.hpp"
-#include "contact.hpp"
 #include "geometry.hpp"
 
 namespace tetiso::reduction {
@@ -68,7 +67,6 @@ struct RoundView {
     SamplesView samples;
     Params p;
     int round;
-    ContactGridView contact; // the round's triangles by grid cell (contact.hpp)
 
     TETISO_HD bool border(i32 v) const { return fans.border[v] != 0; }
     TETISO_HD i32 face(i32 slot) const { return fans.face[slot]; }

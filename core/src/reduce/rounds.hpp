@@ -15,6 +15,8 @@
 //   5. select:    the independent set in priority order (selection.hpp); Φ,
 //                 the position and the legality tests are computed here,
 //                 only for what could still be chosen; then the flips;
+//                 then those chosen whose new faces would meet a face they
+//                 share no corner with are dropped (contact_filter.hpp);
 //   6. apply:     the chosen operations touch disjoint triangles and
 //                 vertices (apply.hpp);
 //   7. compact:   drop removed vertices and triangles, keeping their order
@@ -34,6 +36,7 @@
 #include "../hd.hpp"
 #include "adjacency.hpp"
 #include "apply.hpp"
+#include "contact_filter.hpp"
 #include "criterion.hpp"
 #include "error_bound.hpp"
 #include "legality.hpp"
@@ -56,7 +59,7 @@ struct ReductionState {
     Edges<Exec> edges;
     Array<FaceGeometry> geometry;
     Array<Cone> cones;
-    ContactGrid<Exec> contact;
+    ContactFilter<Exec> contact;
     Array<u8> kind;
     Array<u32> priority;
     Array<float> px, py, pz, err;
@@ -216,13 +219,11 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         exec.assign(st.refused, ne, u8{0});
         if (st.samples.on) st.samples.sort(exec, st.geometry, s.nt);
         build_cones(exec, s.view(), fans, st.geometry.data(), st.cones);
+        const EdgesView edges = st.edges.view();
+        const RoundView m{s.view(), fans, edges, st.geometry.data(), st.cones.data(), st.samples.view(), params, round};
+        const OpsView ops = st.ops();
         // The piece of a vertex: 0 unless this is a batch of several.
         const i32* vertex_piece = pieces > 1 ? st.vertex_piece.data() : nullptr;
-        build_contact_grid(exec, s.view(), vertex_piece, st.contact);
-        const EdgesView edges = st.edges.view();
-        const RoundView m{s.view(),         fans,   edges, st.geometry.data(), st.cones.data(),
-                          st.samples.view(), params, round, st.contact.view()};
-        const OpsView ops = st.ops();
         {
             const u32* refused_slots = st.refused_slots.data();
             const u8* changed = st.changed.data();
@@ -288,6 +289,7 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
             return kind[offered_list[k]] == kFlip;
         }, st.flips);
         choose<true>(exec, sel, clear_view, st.flips, flips, s.nv, st.priority.data(), chosen, refused, FlipTest{});
+        drop_contacts(exec, st.contact, m, ops, ne, chosen, owner, vertex_piece);
         {
             u32* refused_slots = st.refused_slots.data();
             exec.for_each(s.nv, [=] TETISO_HD(i64 v) {
