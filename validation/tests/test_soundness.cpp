@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -332,6 +333,121 @@ TEST(ContactTest, OperationsOfOneRoundAreJudgedAgainstEachOther) {
         options.phi = 0.5;
         options.max_error = 0.2;
         EXPECT_EQ(violations(reduce(both, options)), "") << threads << " threads";
+    }
+}
+
+// ------------------------------------------------- seams: the region's rim
+
+// Soak job 46:514: the seam of domains 0 and 1 of the N = 17 lattice's
+// 5-domain split, reduced without rings (the umbrellas of the unlocked
+// vertices alone). A collapse there moved a vertex of the interface y = 2.5
+// onto another, laying two faces in the plane x = 0.625, and one of their
+// edges over the fold of two faces of domain 0 that lay beyond the region's
+// rim (their common edge in that plane): 8 pairs of triangles crossed.
+JobConfig job_46_514() {
+    JobConfig config;
+    config.lattice = 17;
+    config.domains = 5;
+    config.level = 2.5152339935302734;
+    config.seam_rings = 0;
+    config.sample_rings = 1;
+    config.max_error_spacings = 0;
+    return config;
+}
+
+TEST(SurfacesAreClean, ASeamWhoseRegionEndsBesideAFold) {
+    EXPECT_EQ(violations(run_local(Job(job_46_514()), {}).surface), "");
+}
+
+// Triangles around each vertex key, counted.
+std::map<EdgeKey, int> fan_sizes(const Piece& piece) {
+    std::map<EdgeKey, int> out;
+    for (const std::int32_t v : piece.triangles) ++out[piece.key[static_cast<std::size_t>(v)]];
+    return out;
+}
+
+// The legality tests of a collapse or flip read the whole fan of every
+// corner of the faces it makes, which are the vertices it moves or removes
+// and their neighbours: in a seam's reduction, each free vertex and each of
+// its neighbours has every triangle of its fan in the region handed to the
+// reduction; the triangles it holds beyond (those whose corners are all
+// locked) come back unchanged.
+TEST(SeamRegion, EveryFanAFreeVertexTouchesIsWholeAndTheFacesBeyondStay) {
+    const Job job(job_46_514());
+    std::vector<Piece> domain(2);
+    for (int task = 0; task < job.task_count(); ++task)
+        if (job.kind(task) == TaskKind::domain && job.node(task).first < 2) {
+            TaskRecord record;
+            domain[static_cast<std::size_t>(job.node(task).first)] =
+                job.execute(task, nullptr, nullptr, record, TaskThreads{});
+        }
+    const EdgeDomains holders = [&](GlobalId a, GlobalId b) { return job.partition().domains_of_edge(a, b); };
+    Piece merged = merge_by_key(domain[0], domain[1]);
+    ASSERT_GT(unlock_settled(merged, holders), 0u);
+    const std::map<EdgeKey, int> whole = fan_sizes(merged);
+    for (const int rings : {0, 1}) {
+        SCOPED_TRACE("seam rings " + std::to_string(rings));
+        SeamOptions options;
+        options.reduce_options = job.config().reduce_options; // max_error_spacings 0: as given
+        options.rings = rings;
+        std::size_t free_vertices = 0, beyond = 0;
+        options.reducer = [&](const Piece& region, const ReduceOptions& o, ReduceReport* report) {
+            const std::map<EdgeKey, int> held = fan_sizes(region);
+            for (std::size_t t = 0; t < region.triangle_count(); ++t) {
+                bool any_free = false;
+                for (std::size_t c = 0; c < 3; ++c)
+                    any_free = any_free || !(region.flags[static_cast<std::size_t>(region.triangles[3 * t + c])] & kLocked);
+                if (!any_free) continue;
+                for (std::size_t c = 0; c < 3; ++c) {
+                    const EdgeKey key = region.key[static_cast<std::size_t>(region.triangles[3 * t + c])];
+                    EXPECT_EQ(held.at(key), whole.at(key)) << "the fan of vertex " << key << " is cut";
+                }
+            }
+            for (const std::uint8_t f : region.flags) free_vertices += (f & kLocked) ? 0 : 1;
+            const Piece reduced = reduce(region, o, report);
+            const auto after = test::canonical_triangles(reduced);
+            for (const auto& t : test::canonical_triangles(region)) {
+                const auto is_locked = [&](EdgeKey key) {
+                    const auto at = std::lower_bound(region.key.begin(), region.key.end(), key);
+                    return (region.flags[static_cast<std::size_t>(at - region.key.begin())] & kLocked) != 0;
+                };
+                if (!is_locked(t[0]) || !is_locked(t[1]) || !is_locked(t[2])) continue;
+                ++beyond;
+                EXPECT_TRUE(std::binary_search(after.begin(), after.end(), t))
+                    << "a triangle of locked vertices " << t[0] << " " << t[1] << " " << t[2] << " changed";
+            }
+            return reduced;
+        };
+        const Piece joined = seam(domain[0], domain[1], holders, options);
+        EXPECT_GT(free_vertices, 0u);
+        EXPECT_GT(beyond, 0u);
+        EXPECT_EQ(violations(joined), "");
+    }
+}
+
+// A flip changes only faces with a free corner, as a collapse does: two thin
+// triangles in a plane, (u, w, c) and (w, u, d), the flip of (u, w) doubling
+// their smallest angle. With u, w and d locked, (w, u, d) may be a face a
+// seam's reduction holds beyond its region, and stays; with d free, it flips.
+TEST(SeamRegion, AFlipLeavesAFaceOfLockedVerticesAsItIs) {
+    for (const bool d_locked : {true, false}) {
+        SCOPED_TRACE(d_locked ? "d locked" : "d free");
+        Piece in;
+        in.x = {-1.0f, 1.0f, 0.0f, 0.0f}; // u, w, c, d
+        in.y = {0.0f, 0.0f, 0.2f, -0.2f};
+        in.z = {0.0f, 0.0f, 0.0f, 0.0f};
+        in.key = {1, 2, 3, 4};
+        in.flags = {kLocked, kLocked, 0, static_cast<std::uint8_t>(d_locked ? kLocked : 0)};
+        in.triangles = {0, 1, 2, 1, 0, 3};
+        ReduceOptions options;
+        options.phi = 1.0; // no collapse but the short-edge branch's
+        options.short_edge_ratio = 0.0;
+        ReduceReport report;
+        const Piece out = reduce(in, options, &report);
+        std::size_t flips = 0;
+        for (const auto& round : report.rounds) flips += round.flips;
+        EXPECT_EQ(flips, d_locked ? 0u : 1u);
+        EXPECT_EQ(test::canonical_triangles(out) == test::canonical_triangles(in), d_locked);
     }
 }
 

@@ -5,7 +5,8 @@
 //  - link condition: the common neighbours of u and w are exactly the
 //    opposite vertices (two inside, one on the border);
 //  - no new edge joins two locked vertices (a piece across an interface may
-//    create the same edge, and seaming would give it 3 or 4 triangles);
+//    create the same edge, and seaming would give it 3 or 4 triangles), and
+//    no face whose corners are all locked changes;
 //  - every vertex keeps at least 3 neighbours (2 on the border), so no
 //    component drops below a tetrahedron; a border loop keeps 3 edges;
 //  - every surviving face of the two leaves keeps its orientation (normal
@@ -559,7 +560,13 @@ TETISO_HD inline bool propose_flip(const RoundView& m, i32 e, const OpsView& ops
     if (m.fans.nn(u) - 1 < (m.border(u) ? 2 : 3) || m.fans.nn(w) - 1 < (m.border(w) ? 2 : 3)) return false;
     for (i32 j = 0, n = m.fans.nn(c); j < n; ++j)
         if (m.fans.nbr(c, j) == d) return false;
-    if (m.s.locked(c) && m.s.locked(d)) return false; // see legal_collapse: no new locked-locked edge
+    // No new locked-locked edge (see connectivity_allows); and, as with a
+    // collapse (which changes only faces around the vertex that moves), no
+    // change to a face whose corners are all locked: a seam's reduction holds
+    // the faces around its region's rim only for the legality tests to read
+    // (reduce_near), and they must come back as they were.
+    const bool locked_edge = m.s.locked(u) && m.s.locked(w);
+    if ((m.s.locked(c) && m.s.locked(d)) || (locked_edge && (m.s.locked(c) || m.s.locked(d)))) return false;
     // No face pushed through its neighbours (see Cones); where a cone does
     // not settle it the flip, an improvement only, is not made.
     if (!inside_cone(m, u, n1) || !inside_cone(m, c, n1) || !inside_cone(m, d, n1) || !inside_cone(m, w, n2) ||
