@@ -6,13 +6,16 @@
 // decomposition; on an interface, locked, they reached the output unreduced.
 // These cases put the level exactly at a node's value and an ulp either side,
 // on nodes of interfaces, and check the raw surface, every domain's piece and
-// the job's result with the contract's gate (contract_violations).
+// the job's result with the contract's gate (contract_violations); and that
+// the clusters of crossings the clearance leaves around such a node do not
+// stay in a reduced surface as needles.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <set>
 #include <string>
@@ -20,6 +23,7 @@
 
 #include "extract_rules.hpp"
 #include "reduce/contact.hpp"
+#include "reduce/geometry.hpp"
 #include "reduce_cases.hpp"
 #include "test_support.hpp"
 #include "tetiso/check.hpp"
@@ -448,6 +452,115 @@ TEST(SeamRegion, AFlipLeavesAFaceOfLockedVerticesAsItIs) {
         for (const auto& round : report.rounds) flips += round.flips;
         EXPECT_EQ(flips, d_locked ? 0u : 1u);
         EXPECT_EQ(test::canonical_triangles(out) == test::canonical_triangles(in), d_locked);
+    }
+}
+
+// ------------------------------------------------------- near-degenerate triangles
+
+// The reduction judges faces thinner than kArtefactUlps as artefacts of
+// where their corners were put (geometry.hpp, resolved): that must cover the
+// clusters the node clearance makes, two crossings up to 2√3 clearances
+// apart (extract_rules.hpp).
+static_assert(reduction::kArtefactUlps >= 4.0 * extract_rules::kNodeClearanceUlps,
+              "a node's cluster of crossings is wider than the reduction's artefact scale");
+
+// Whether edge (a, b) of a surface is as short as the node clearance makes
+// them: under kArtefactUlps units in the last place of its largest coordinate.
+bool at_clearance_scale(const Piece& s, std::int32_t a, std::int32_t b) {
+    const auto ia = static_cast<std::size_t>(a), ib = static_cast<std::size_t>(b);
+    const double dx = s.x[ia] - s.x[ib], dy = s.y[ia] - s.y[ib], dz = s.z[ia] - s.z[ib];
+    const double largest = std::max({std::fabs(s.x[ia]), std::fabs(s.y[ia]), std::fabs(s.z[ia]), std::fabs(s.x[ib]),
+                                     std::fabs(s.y[ib]), std::fabs(s.z[ib])});
+    return std::sqrt(dx * dx + dy * dy + dz * dz) < reduction::kArtefactUlps * 0x1p-23 * largest;
+}
+
+double smallest_angle_degrees(const Piece& s, std::size_t t) {
+    std::array<std::array<double, 3>, 3> p{};
+    for (std::size_t c = 0; c < 3; ++c) {
+        const auto v = static_cast<std::size_t>(s.triangles[3 * t + c]);
+        p[c] = {s.x[v], s.y[v], s.z[v]};
+    }
+    double smallest = 180.0;
+    for (std::size_t c = 0; c < 3; ++c) {
+        const auto& o = p[c];
+        const auto& q = p[(c + 1) % 3];
+        const auto& r = p[(c + 2) % 3];
+        double dot = 0, lq = 0, lr = 0;
+        for (std::size_t k = 0; k < 3; ++k) {
+            dot += (q[k] - o[k]) * (r[k] - o[k]);
+            lq += (q[k] - o[k]) * (q[k] - o[k]);
+            lr += (r[k] - o[k]) * (r[k] - o[k]);
+        }
+        if (lq == 0 || lr == 0) return 0.0;
+        smallest = std::min(smallest, std::acos(std::clamp(dot / std::sqrt(lq * lr), -1.0, 1.0)) * 180.0 / std::numbers::pi);
+    }
+    return smallest;
+}
+
+// Spheres of radius² = m h² on the N = 41 lattice (h = 1/8: coordinates,
+// field and level exact in float), centred on a node or 4 h below the cube's
+// face z = 0, so that every node (i, j, k) with (i-20)² + (j-20)² + (k-k0)²
+// = m lies on the level and the crossings of its edges sit at the node
+// clearance: a cluster a few dozen ulps across around each, with needles
+// from it to the rest of the surface; the second sphere's clusters lie on
+// the surface's border, where the nodes on the face meet the level. Every
+// raw triangle under 1° touches such a cluster. A move within a cluster is
+// far inside the error bound, and the angle floor lets no operation make a
+// new triangle under 1° out of good ones, so a reduction that may merge the
+// clusters leaves no edge at the clearance's scale and no triangle under 1°.
+TEST(NearDegenerateTriangles, ClustersOfNodesOnTheLevelAreMergedWhole) {
+    struct Case {
+        std::string field;
+        int k0, m;
+    };
+    const std::vector<Case> cases = {{"(x-2.5)^2+(y-2.5)^2+(z-2.5)^2", 20, 81},
+                                     {"(x-2.5)^2+(y-2.5)^2+(z-2.5)^2", 20, 300},
+                                     {"(x-2.5)^2+(y-2.5)^2+(z+0.5)^2", -4, 125}};
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.field + " at " + std::to_string(c.m) + " h^2");
+        int on_level = 0, on_face = 0;
+        for (int i = 0; i <= 40; ++i)
+            for (int j = 0; j <= 40; ++j)
+                for (int k = 0; k <= 40; ++k)
+                    if ((i - 20) * (i - 20) + (j - 20) * (j - 20) + (k - c.k0) * (k - c.k0) == c.m) {
+                        ++on_level;
+                        on_face += k == 0;
+                    }
+        ASSERT_GT(on_level, 0);
+        if (c.k0 < 0) {
+            ASSERT_GT(on_face, 0) << "no node on the cube's face lies on the level";
+        }
+        const double level = c.m / 64.0;
+        const Piece raw = test::lattice_surface(41, 1, c.field, level);
+        std::size_t raw_slivers = 0;
+        for (std::size_t t = 0; t < raw.triangle_count(); ++t) {
+            if (!(smallest_angle_degrees(raw, t) < 1.0)) continue;
+            ++raw_slivers;
+            const std::int32_t* v = &raw.triangles[3 * t];
+            EXPECT_TRUE(at_clearance_scale(raw, v[0], v[1]) || at_clearance_scale(raw, v[1], v[2]) ||
+                        at_clearance_scale(raw, v[2], v[0]))
+                << "raw triangle " << t << " is under 1 degree away from any node on the level";
+        }
+        ASSERT_GT(raw_slivers, 0u) << "the case has no cluster to merge";
+        for (const int domains : {1, 6}) {
+            SCOPED_TRACE("domains " + std::to_string(domains));
+            JobConfig config;
+            config.lattice = 41;
+            config.domains = domains;
+            config.field = c.field;
+            config.level = level;
+            const Piece out = run_local(Job(config), {}).surface;
+            EXPECT_EQ(violations(out), "");
+            std::size_t short_edges = 0, slivers = 0;
+            for (std::size_t t = 0; t < out.triangle_count(); ++t) {
+                const std::int32_t* v = &out.triangles[3 * t];
+                short_edges += at_clearance_scale(out, v[0], v[1]) + at_clearance_scale(out, v[1], v[2]) +
+                               at_clearance_scale(out, v[2], v[0]);
+                slivers += smallest_angle_degrees(out, t) < 1.0;
+            }
+            EXPECT_EQ(short_edges, 0u);
+            EXPECT_EQ(slivers, 0u);
+        }
     }
 }
 

@@ -60,7 +60,10 @@ struct ReduceOptions {
     // the smallest angle of the region it changes smaller than
     // min(min_angle_degrees, that region's smallest angle before), so
     // collapses that clean up degenerate triangles stay possible but no
-    // operation creates a triangle worse than the bound out of good ones.
+    // operation creates a triangle worse than the bound out of good ones
+    // (a needle a few dozen ulps wide, an artefact of where extraction put
+    // its corners near a mesh node, is held to an area float resolves
+    // instead).
     // 1 degree is the checker's "near degenerate" line; larger bounds keep
     // more triangles and remove few more bad ones. Valid range [0, 30].
     double min_angle_degrees = 1.0;

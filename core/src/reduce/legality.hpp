@@ -14,7 +14,9 @@
 //    mean normal where it had none) and keeps a non-zero area; the smallest
 //    angle over the new faces is at least min(min_angle, the smallest angle
 //    over the old faces), so collapses that remove a degenerate face stay
-//    possible but none makes the worst angle of its region worse. Faces
+//    possible but none makes the worst angle of its region worse (a face
+//    with no normal of its own before and after, geometry.hpp, is held to
+//    an area float resolves instead). Faces
 //    that do not move (around a survivor that stays put) are not judged,
 //    and a valence-3 removal's one new face has no turn test;
 //  - no new contact: faces that share a corner meet nowhere else, among the
@@ -460,8 +462,16 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
         // No face with a normal of its own (valid) becomes degenerate or
         // turns; one whose normal is rounding's may become degenerate, its
         // own short edge will remove it, and must face the leaves' way only
-        // once the collapse gives it a normal of its own.
-        spoiled = moves && (q_new < q_floor || (!(q_new > 0) && g.valid()) ||
+        // once the collapse gives it a normal of its own. A face that has no
+        // normal of its own before and after (an artefact of the node
+        // clearance, geometry.hpp) is held to an area that float resolves
+        // rather than to the quality floor: when it was its region's worst
+        // face, every way of moving a corner of the cluster made it a little
+        // thinner, and the floor refused them all (the needles along the
+        // border of the paper surface, where a node on a cube face meets the
+        // level).
+        const bool below_floor = q_new < q_floor && !(!g.valid() && resolvable_artefact(p, a, b));
+        spoiled = moves && (below_floor || (!(q_new > 0) && g.valid()) ||
                             (g.valid() ? q_new > 0 && !removes_valence3 && dot(n, g.n()) < m.p.cos_turn
                                        : resolved(p, a, b) && dot(n, nsum) < 0));
         if (faces < NewFan::kMax) {
