@@ -95,6 +95,12 @@ struct ReduceOptions {
     // minimum angle of the two faces by more than 20 %.
     bool flips = true;
     double flip_max_dihedral_degrees = 10.0;
+    // The test of each new face against the faces near it that share no
+    // corner with it (the contract's "no self-intersection" where a surface
+    // folds back close to itself). Off, a reduction costs about half as
+    // much, and its result may cross itself where two sheets come within a
+    // fan's size of each other.
+    bool contact_test = true;
     // Triangles beside the piece, not part of it (nine coordinates each, x,
     // y, z of three corners): no new triangle may meet one, other than at a
     // corner it shares with it by position. A seam reducing a region of a
@@ -132,7 +138,7 @@ struct ReduceRound {
 // the reduce stage of StageSeconds taken apart (for profiling; see
 // rounds.hpp for the steps).
 struct ReduceStageSeconds {
-    double fans = 0, edges = 0, geometry = 0, propose = 0, select = 0, apply = 0, compact = 0;
+    double fans = 0, edges = 0, geometry = 0, propose = 0, select = 0, contact = 0, apply = 0, compact = 0;
 };
 
 struct ReduceReport {

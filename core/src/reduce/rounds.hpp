@@ -289,7 +289,9 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
             return kind[offered_list[k]] == kFlip;
         }, st.flips);
         choose<true>(exec, sel, clear_view, st.flips, flips, s.nv, st.priority.data(), chosen, refused, FlipTest{});
-        drop_contacts(exec, st.contact, m, ops, ne, chosen, owner, vertex_piece);
+        lap(seconds.select);
+        if (options.contact_test) drop_contacts(exec, st.contact, m, ops, ne, chosen, owner, vertex_piece);
+        lap(seconds.contact);
         {
             u32* refused_slots = st.refused_slots.data();
             exec.for_each(s.nv, [=] TETISO_HD(i64 v) {
@@ -302,7 +304,6 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         }
         stats.candidates = static_cast<std::size_t>(candidates) + static_cast<std::size_t>(flips);
         stats.selection_steps = sel.steps;
-        lap(seconds.select);
 
         // Samples still to move: those of the flips (a collapse's test moved
         // its samples when it was chosen). A round that chose nothing goes
