@@ -334,7 +334,7 @@ def paper_reproduction(folder):
               f"messages) and the tasks' own {inflation:.2f}× time when every core is busy.")
     sound = list(checks.values()) + [render_check]
     ok = all(c["topology"]["manifold"] and c["topology"]["oriented"] and not c["topology"]["degenerate_triangles"]
-             for c in sound)
+             and not c.get("violations") for c in sound)
     summary.append(f"Topology: {len(sound)} surface(s) checked, " + (
         "all manifold, consistently oriented, without degenerate triangles." if ok else
         "**some unsound: see the table.**"))
@@ -358,7 +358,9 @@ def paper_reproduction(folder):
                            f"{t['non_manifold_edges']} / {t['non_manifold_vertices']}",
                            "yes" if t["oriented"] else "**no**", t["degenerate_triangles"],
                            f"{t['min_angle_deg']['below_1']:,}", f"{t['min_angle_deg']['min']:.3g}°",
-                           "not counted" if c.get("self_intersections") is None else c["self_intersections"]])
+                           "not counted" if c.get("self_intersections") is None else c["self_intersections"],
+                           "not recorded" if c.get("violations") is None else
+                           "clean" if not c["violations"] else "; ".join(c["violations"])])
 
     fig, ax = figure(6.4, 5.4)
     top = max(16, max(r["workers"] for r in rows) + 1)
@@ -400,7 +402,8 @@ def paper_reproduction(folder):
                      stages),
         triangles=table(["domains", "raw triangles", "reduced triangles", "ratio", "distinct hashes"], triangles),
         checks=table(["domains", "triangles", "components", "signature", "manifold", "non-manifold edges / vertices",
-                      "consistently oriented", "degenerate", "angles < 1°", "smallest angle", "self-intersections"],
+                      "consistently oriented", "degenerate", "angles < 1°", "smallest angle", "self-intersections",
+                      "`check --strict`"],
                      check_rows),
         # A check made apart from the sweep (a later commit's surface, the
         # same bytes for any rank count) says where it comes from.
@@ -413,9 +416,16 @@ def paper_reproduction(folder):
 
 
 def soundness(folder):
-    """tools/soak.py's campaigns: every campaign*.json of the folder."""
+    """tools/soak.py's campaigns: every campaign*.json of the folder (the current code's), every
+    earlier-campaign*.json (before the reduction's contact test), and regressions.json (the earlier
+    campaigns' failures run again with the contact test)."""
     campaigns = [json.loads(p.read_text()) for p in sorted(folder.glob("campaign*.json"))]
     records = [dict(r, seed=c["seed"]) for c in campaigns for r in c["records"]]
+    earlier = [json.loads(p.read_text()) for p in sorted(folder.glob("earlier-campaign*.json"))]
+    earlier_records = [dict(r, seed=c["seed"]) for c in earlier for r in c["records"]]
+    earlier_failed = [r for r in earlier_records if r["outcome"] != "clean"]
+    regressions = load(folder, "regressions.json")
+    rerun = {(r["seed"], r["index"]): r["outcome"] for r in regressions["records"]}
     outcomes = Counter(r["outcome"] for r in records)
     kinds = Counter((r["kind"], r["level_kind"]) for r in records)
     sources = Counter("lattice" if "lattice" in r else r["mesh"] for r in records)
@@ -447,6 +457,19 @@ def soundness(folder):
         before=before, before_failed=len(before_failed), before_reduced=len(before_reduced),
         before_examples=bullets(f"job {r['index']} (`{r['kind']}`): {r['violations'][0]}" for r in before_reduced[:3]),
         jobs=len(records), clean=outcomes.get("clean", 0), failed=len(failed), campaigns=campaigns,
+        earlier_jobs=len(earlier_records), regressions=regressions,
+        earlier_outcomes=", ".join(f"{n:,} {k}" for k, n in sorted(Counter(r["outcome"] for r in earlier_records).items())),
+        earlier_commits=", ".join(sorted({c["commit"][:7] for c in earlier})),
+        rerun_clean=sum(o == "clean" for o in rerun.values()), rerun_count=len(rerun),
+        earlier_table=table(["seed: job", "command", "outcome", "what", "to reproduce", "with the contact test"],
+                            [[f"{r['seed']}: {r['index']}", f"`{r['kind']}`", r["outcome"],
+                              "; ".join(r.get("violations", [])) or r.get("detail", ""),
+                              "<br>".join(f"`{c}`" for c in r["reproduce"]),
+                              rerun.get((r["seed"], r["index"]), "not run again")] for r in earlier_failed]),
+        earlier_provenance=bullets(f"`{c['command']}` (written as {c['command'].split('--json ')[-1]}, now "
+                                   f"earlier-{c['command'].split('--json ')[-1].split('/')[-1]}): {c['jobs']:,} jobs "
+                                   f"in {c['seconds'] / 60:.1f} min; commit {c['commit']}; started {c['started']}; "
+                                   f"{c['machine']}" for c in earlier),
         outcomes=", ".join(f"{n:,} {k}" for k, n in sorted(outcomes.items())),
         kinds_table=table(["command", "level", "jobs"],
                           [[f"`{k}`", lv, f"{n:,}"] for (k, lv), n in sorted(kinds.items())]),

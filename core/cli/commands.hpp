@@ -25,8 +25,8 @@ void add_run_command(CLI::App& app, Command& run);
 void add_reduce_command(CLI::App& app, Command& run);
 void add_split_command(CLI::App& app, Command& run);
 
-// --phi, shared by every command that reduces.
-void add_phi_option(CLI::App& cmd, double& phi);
+// --phi and --no-contact-test, shared by every command that reduces.
+void add_reduction_options(CLI::App& cmd, ReduceOptions& options);
 
 // The checks every command applies to the options of the same kind, so that
 // one value is refused, or taken, the same way by each (a NaN passes a

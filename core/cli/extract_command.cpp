@@ -226,7 +226,7 @@ void add_extract_command(CLI::App& app, Command& run) {
     add_threads_option(*cmd, args->threads, "Threads inside a domain (0 = all cores); output does not depend on it");
     add_device_options(*cmd, args->device, "the marching tetrahedra and the reduction");
     cmd->add_flag("--reduce", args->reduce, "Reduce the combined surface (parallel edge collapse and flip)");
-    add_phi_option(*cmd, args->reduce_options.phi);
+    add_reduction_options(*cmd, args->reduce_options);
     cmd->add_option("--max-error", args->max_error_spacings,
                     "With --reduce: bound on the distance to the raw surface, in lattice spacings (mean tetrahedron edge lengths with --mesh; 0: none)")
         ->check(error_bound_check())

@@ -11,10 +11,13 @@
 
 namespace tetiso::cli {
 
-void add_phi_option(CLI::App& cmd, double& phi) {
-    cmd.add_option("--phi", phi, "Reduction threshold PHI* in (0, 1]: an edge collapses when its PHI exceeds it")
+void add_reduction_options(CLI::App& cmd, ReduceOptions& options) {
+    cmd.add_option("--phi", options.phi, "Reduction threshold PHI* in (0, 1]: an edge collapses when its PHI exceeds it")
         ->check(phi_check())
         ->capture_default_str();
+    cmd.add_flag("--no-contact-test{false}", options.contact_test,
+                 "Skip the test of new faces against nearby faces that share no corner with them: about half the "
+                 "reduction's time, but where the surface folds back close to itself the result may cross itself");
 }
 
 nlohmann::json reduce_json(const ReduceReport& report) {
@@ -40,6 +43,7 @@ nlohmann::json reduce_json(const ReduceReport& report) {
               {"propose", report.stages.propose},
               {"select", report.stages.select},
               {"apply", report.stages.apply},
+              {"contact", report.stages.contact},
               {"compact", report.stages.compact}}}};
 }
 
@@ -103,7 +107,7 @@ void add_reduce_command(CLI::App& app, Command& run) {
     CLI::App* cmd = app.add_subcommand("reduce", "Reduce a surface: parallel edge collapse and flip, topology kept");
     cmd->add_option("input", args->input, "Surface to reduce, .ply or .vtp (an oriented manifold)")->required();
     cmd->add_option("-o,--output", args->output, "Reduced surface, .ply or .vtp")->required();
-    add_phi_option(*cmd, args->options.phi);
+    add_reduction_options(*cmd, args->options);
     cmd->add_option_function<double>(
            "--max-error", [args](double e) { args->max_error = e; },
            "Bound on the distance to the input surface, absolute (0: none; default: 0.4 x mean edge length); "

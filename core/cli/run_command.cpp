@@ -245,7 +245,7 @@ void add_run_command(CLI::App& app, Command& run) {
                                                 "(default: the one the file marks, e.g. GlobalNodeIds)")
         ->needs(mesh);
     add_level_option(*cmd, job.level, "Isosurface level (default: the field's own, 0.5 for paper; 0 for --attribute or --array)");
-    add_phi_option(*cmd, job.reduce_options.phi);
+    add_reduction_options(*cmd, job.reduce_options);
     cmd->add_option("--max-error", job.max_error_spacings,
                     "Bound on the distance to the raw surface, in spacings: the lattice's, or a mesh's mean "
                     "edge length (0: none)")

@@ -6,6 +6,7 @@
 #include <array>
 #include <bit>
 #include <chrono>
+#include <limits>
 #include <numeric>
 #include <string>
 
@@ -329,27 +330,62 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
         }
         return grew;
     };
-    for (const std::int32_t v : reached) take_umbrella(v);
-    for (std::vector<std::int32_t> pinched = pinched_vertices(piece, region); !pinched.empty();
-         pinched = pinched_vertices(piece, region)) {
-        bool froze = false;
-        for (const std::int32_t v : pinched)
-            if (!take_umbrella(v)) {
-                frozen[static_cast<std::size_t>(v)] = 1;
-                froze = true;
+    // Grows the region over pinched vertices until it is a manifold with
+    // border, freezing the vertices that growing cannot mend.
+    auto mend_pinches = [&] {
+        for (std::vector<std::int32_t> pinched = pinched_vertices(piece, region); !pinched.empty();
+             pinched = pinched_vertices(piece, region)) {
+            bool froze = false;
+            for (const std::int32_t v : pinched)
+                if (!take_umbrella(v)) {
+                    frozen[static_cast<std::size_t>(v)] = 1;
+                    froze = true;
+                }
+            if (froze) {
+                std::erase_if(region, [&](std::int32_t t) {
+                    if (allowed(t)) return false;
+                    in_region[static_cast<std::size_t>(t)] = 0;
+                    return true;
+                });
             }
-        if (froze) {
-            std::erase_if(region, [&](std::int32_t t) {
-                if (allowed(t)) return false;
-                in_region[static_cast<std::size_t>(t)] = 0;
-                return true;
-            });
         }
-    }
+    };
+    const auto whole_umbrella_in = [&](std::size_t v, const std::vector<std::uint8_t>& in) {
+        for (std::int32_t j = around.first[v]; j < around.first[v + 1]; ++j)
+            if (!in[static_cast<std::size_t>(around.list[static_cast<std::size_t>(j)])]) return false;
+        return true;
+    };
+    for (const std::int32_t v : reached) take_umbrella(v);
+    mend_pinches();
+
+    // What the reduction may change: the vertices whose every triangle is in
+    // the region (inner); the others, the rim, are locked so that the region
+    // still fits the rest of the piece. The legality tests of a collapse or
+    // flip (link condition, valences, cones, contacts) read the whole fan of
+    // every corner of the faces it makes, rim vertices among them: a fan cut
+    // at the rim hides the common neighbours that only faces beyond it join,
+    // and the faces beyond it that a new face may come to touch (soak job
+    // 46:514: two faces laid into the plane of a fold just beyond the rim,
+    // across its edge). So the reduction also gets the triangles around the
+    // rim, every vertex of theirs locked; no operation changes a face whose
+    // corners are all locked (legality.hpp), so they come back as they were.
+    // Where a rim vertex's fan cannot be completed (a frozen vertex beside
+    // it), its neighbours are locked too, so that no face is made at it.
+    std::vector<std::uint8_t> inner(n, 0);
+    for (const std::int32_t t : region)
+        for (int k = 0; k < 3; ++k) {
+            const auto v = static_cast<std::size_t>(piece.triangles[3 * static_cast<std::size_t>(t) + static_cast<std::size_t>(k)]);
+            inner[v] = whole_umbrella_in(v, in_region);
+        }
+    for (std::size_t r = 0, inner_end = region.size(); r < inner_end; ++r)
+        for (int k = 0; k < 3; ++k) {
+            const std::int32_t v = piece.triangles[3 * static_cast<std::size_t>(region[r]) + static_cast<std::size_t>(k)];
+            if (!inner[static_cast<std::size_t>(v)]) take_umbrella(v);
+        }
+    mend_pinches();
     std::sort(region.begin(), region.end());
 
-    // The sub-piece, numbered in the piece's (key) order; its rim is locked so
-    // that it still fits the rest of the piece after reduction.
+    // The sub-piece, numbered in the piece's (key) order.
     std::vector<std::int32_t> local(n, -1);
     std::vector<std::int32_t> members;
     for (const std::int32_t t : region)
@@ -361,19 +397,28 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
             }
         }
     std::sort(members.begin(), members.end());
+    std::vector<std::uint8_t> complete(n, 0);
+    for (const std::int32_t v : members)
+        complete[static_cast<std::size_t>(v)] = whole_umbrella_in(static_cast<std::size_t>(v), in_region);
+    const auto free_to_change = [&](std::size_t v) {
+        if (!inner[v] || !complete[v]) return false;
+        for (std::int32_t j = around.first[v]; j < around.first[v + 1]; ++j)
+            for (int k = 0; k < 3; ++k)
+                if (!complete[static_cast<std::size_t>(
+                        piece.triangles[3 * static_cast<std::size_t>(around.list[static_cast<std::size_t>(j)]) + static_cast<std::size_t>(k)])])
+                    return false;
+        return true;
+    };
     Piece sub;
     sub.domains = piece.domains;
     for (std::size_t i = 0; i < members.size(); ++i) {
         const auto v = static_cast<std::size_t>(members[i]);
         local[v] = static_cast<std::int32_t>(i);
-        bool rim = false;
-        for (std::int32_t j = around.first[v]; j < around.first[v + 1] && !rim; ++j)
-            rim = !in_region[static_cast<std::size_t>(around.list[static_cast<std::size_t>(j)])];
         sub.x.push_back(piece.x[v]);
         sub.y.push_back(piece.y[v]);
         sub.z.push_back(piece.z[v]);
         sub.key.push_back(piece.key[v]);
-        sub.flags.push_back(static_cast<std::uint8_t>(piece.flags[v] | (rim ? kLocked : 0)));
+        sub.flags.push_back(static_cast<std::uint8_t>(piece.flags[v] | (free_to_change(v) ? 0 : kLocked)));
     }
     const Rows held = samples_of(piece);
     for (std::size_t r = 0; r < region.size(); ++r) {
@@ -390,6 +435,38 @@ Piece reduce_near(const Piece& piece, const std::vector<std::uint8_t>& seed, con
     ReduceReport reduce_report;
     ReduceOptions reduce_options = options.reduce_options;
     reduce_options.keep_samples = true;
+    // The reduction keeps its new faces within the box of the region's
+    // vertices (each new vertex lies on an edge it collapses): the faces of
+    // the rest of the piece that reach into that box are its obstacles.
+    if (!members.empty()) {
+        std::array<float, 3> lo{sub.x[0], sub.y[0], sub.z[0]}, hi = lo;
+        for (std::size_t i = 0; i < sub.vertex_count(); ++i) {
+            const std::array<float, 3> p{sub.x[i], sub.y[i], sub.z[i]};
+            for (int c = 0; c < 3; ++c) {
+                lo[c] = std::min(lo[c], p[c]);
+                hi[c] = std::max(hi[c], p[c]);
+            }
+        }
+        for (std::size_t t = 0; t < piece.triangle_count(); ++t) {
+            if (in_region[t]) continue;
+            bool apart = false;
+            for (int c = 0; c < 3 && !apart; ++c) {
+                float low = std::numeric_limits<float>::max(), high = -low;
+                for (int k = 0; k < 3; ++k) {
+                    const auto v = static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>(k)]);
+                    const float q = c == 0 ? piece.x[v] : c == 1 ? piece.y[v] : piece.z[v];
+                    low = std::min(low, q);
+                    high = std::max(high, q);
+                }
+                apart = low > hi[c] || high < lo[c];
+            }
+            if (apart) continue;
+            for (int k = 0; k < 3; ++k) {
+                const auto v = static_cast<std::size_t>(piece.triangles[3 * t + static_cast<std::size_t>(k)]);
+                reduce_options.obstacles.insert(reduce_options.obstacles.end(), {piece.x[v], piece.y[v], piece.z[v]});
+            }
+        }
+    }
     const Piece reduced = options.reducer ? options.reducer(sub, reduce_options, &reduce_report)
                                           : reduce(sub, reduce_options, &reduce_report);
     const double reduce_seconds = lap(clock);

@@ -19,7 +19,11 @@
 // Contract (docs/ARCHITECTURE.md, "Contracts"): given a surface clean as
 // written in float32 (extract.hpp), the result is clean as written too: no
 // zero-area triangle, no two vertices at one position, no self-intersection;
-// legality is judged on the float positions that will be written.
+// legality is judged on the float positions that will be written. Each new
+// triangle is tested against every triangle near it, not only those sharing
+// a corner: the round's, the new ones of the operations chosen with it, and
+// `obstacles`. Not tested: triangles that are neither in the piece nor in
+// `obstacles`.
 #pragma once
 
 #include <cstddef>
@@ -56,7 +60,10 @@ struct ReduceOptions {
     // the smallest angle of the region it changes smaller than
     // min(min_angle_degrees, that region's smallest angle before), so
     // collapses that clean up degenerate triangles stay possible but no
-    // operation creates a triangle worse than the bound out of good ones.
+    // operation creates a triangle worse than the bound out of good ones
+    // (a needle a few dozen ulps wide, an artefact of where extraction put
+    // its corners near a mesh node, is held to an area float resolves
+    // instead).
     // 1 degree is the checker's "near degenerate" line; larger bounds keep
     // more triangles and remove few more bad ones. Valid range [0, 30].
     double min_angle_degrees = 1.0;
@@ -88,6 +95,18 @@ struct ReduceOptions {
     // minimum angle of the two faces by more than 20 %.
     bool flips = true;
     double flip_max_dihedral_degrees = 10.0;
+    // The test of each new face against the faces near it that share no
+    // corner with it (the contract's "no self-intersection" where a surface
+    // folds back close to itself). Off, a reduction costs about half as
+    // much, and its result may cross itself where two sheets come within a
+    // fan's size of each other.
+    bool contact_test = true;
+    // Triangles beside the piece, not part of it (nine coordinates each, x,
+    // y, z of three corners): no new triangle may meet one, other than at a
+    // corner it shares with it by position. A seam reducing a region of a
+    // surface passes the rest of the surface around the region, so that the
+    // region cannot be pushed through it.
+    std::vector<float> obstacles;
 };
 
 struct ReduceRound {
@@ -119,7 +138,7 @@ struct ReduceRound {
 // the reduce stage of StageSeconds taken apart (for profiling; see
 // rounds.hpp for the steps).
 struct ReduceStageSeconds {
-    double fans = 0, edges = 0, geometry = 0, propose = 0, select = 0, apply = 0, compact = 0;
+    double fans = 0, edges = 0, geometry = 0, propose = 0, select = 0, contact = 0, apply = 0, compact = 0;
 };
 
 struct ReduceReport {

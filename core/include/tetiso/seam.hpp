@@ -84,7 +84,8 @@ struct SeamReport {
 // The seaming task of the paper: merge two pieces by key, unlock what the
 // merge settled, and reduce again near the seam only. The reduction sees the
 // triangles within `rings` edges of the unlocked vertices, with the region's
-// rim locked, and its result is spliced back by key; its cost is that of the
+// rim locked and the triangles around the rim for its tests to read (locked,
+// unchanged), and its result is spliced back by key; its cost is that of the
 // seam's neighbourhood (plus a few linear passes to find it), not the piece's.
 // The result depends only on the two pieces, never on who seams them or when.
 Piece seam(const Piece& a, const Piece& b, const EdgeDomains& domains_of_edge, const SeamOptions& options = {},

@@ -12,7 +12,10 @@
 // - pieces share no vertex, so no operation of one conflicts with one of
 //   another, and the sequential choice (selection.hpp) restricted to a
 //   piece is the piece's own; legality, Φ and the samples read a piece's
-//   own elements only;
+//   own elements only (the contact test's grid, contact_filter.hpp, holds
+//   every piece's triangles in cells sized for the batch, but judges a face
+//   against its own piece's faces only, and its answer does not depend on
+//   the cell size);
 // - compaction keeps the order of what survives, so pieces stay contiguous;
 //   the samples' grouping by owner is stable, so it restores each piece's;
 // - the stopping rule is kept per piece (rounds.hpp): a finished piece is

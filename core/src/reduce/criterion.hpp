@@ -39,9 +39,11 @@
 //    vertices never collapses (it would pinch the surface).
 //  - very short edges (shorter than short_edge_ratio times the mean of the
 //    other edges of the two faces, or of length 0, as marching tetrahedra
-//    produce where the surface passes through a mesh node), and the two
-//    shorter edges of a degenerate face (a cap): collapsed whatever Φ is,
-//    with first priority.
+//    produce where the surface passes through a mesh node), the two
+//    shorter edges of a degenerate face (a cap) and the shortest edge of a
+//    face whose smallest angle is under min_angle, where it is within the
+//    artefact scale of geometry.hpp: collapsed whatever Φ is, with first
+//    priority.
 //  - every other collapse needs Φ > Φ*; among them the shorter edge (against
 //    the mean of its faces' other edges) goes first.
 //  - valence-3 vertices: an interior free vertex with three neighbours is
@@ -189,12 +191,24 @@ TETISO_HD inline void classify(const RoundView& m, i32 e, const OpsView& ops) {
     lengths(m, r, len, local);
     bool short_edge = len == 0.0 || len <= m.p.short_ratio * local;
     // A degenerate face (a cap: one corner on the opposite side) goes by
-    // collapsing one of its two shorter edges.
-    for (const auto& [f, o] : {std::pair<i32, i32>{r.f1, r.c}, std::pair<i32, i32>{r.f2, r.d}})
-        if (!short_edge && f >= 0 && !m.geo[f].valid()) {
+    // collapsing one of its two shorter edges; a near-degenerate one (its
+    // smallest angle under min_angle) by collapsing its shortest where that
+    // is within the artefact scale (geometry.hpp), whatever Φ says of it:
+    // inside the cluster of crossings around a node on the level an edge is
+    // not short against its faces' other edges when those are needles too,
+    // and Φ, read from the needles' normals, refuses it. Longer edges keep
+    // Φ's judgement: collapsing them against it pushed fans through sheets
+    // nearby that share no corner with them, which legality does not test.
+    for (const auto& [f, o] : {std::pair<i32, i32>{r.f1, r.c}, std::pair<i32, i32>{r.f2, r.d}}) {
+        if (short_edge || f < 0) continue;
+        if (!m.geo[f].valid()) {
             const Vec po = m.s.pos(o), pu = m.s.pos(u), pw = m.s.pos(w);
             short_edge = len < std::max(norm(po - pu), norm(po - pw));
+        } else if (m.geo[f].q < m.p.q_min) {
+            const Vec po = m.s.pos(o), pu = m.s.pos(u), pw = m.s.pos(w);
+            short_edge = len <= std::min(norm(po - pu), norm(po - pw)) && within_artefact_scale(pu, pw);
         }
+    }
     // Shorter edges, relative to their faces' other edges, go first.
     ops.kind[e] = kPending;
     ops.priority[e] = short_edge ? make_priority(kClassShort, local > 0 ? 1.0 - len / local : 1.0, hash)

@@ -56,16 +56,29 @@ TETISO_HD inline double quality(Vec a, Vec b, Vec c, Vec* normal_out = nullptr, 
 }
 
 // Whether the normal of triangle (a, b, c), of quality q, is the surface's
-// rather than rounding's. Corners are floats: a face whose height over its
-// longest side is within a few units in the last place of its coordinates
-// has a normal that rounding chose, whatever its quality (a needle one ulp
-// wide and a hundred long has q = 0.01). Marching tetrahedra make such faces
-// where the surface passes within float resolution of a mesh node: the
-// corners near the node then differ in one coordinate alone, by a few ulps,
-// and lie on a line. Judging their collapses by those normals refused every
-// way out of such a cluster, which stayed in the output as zero-area
-// triangles. Below kValidQuality the normal is rounding's at any size.
+// rather than an artefact of where its corners were put. Corners are
+// floats: a face whose height over its longest side is within a few units
+// in the last place of its coordinates has a normal that rounding chose,
+// whatever its quality (a needle one ulp wide and a hundred long has
+// q = 0.01). Marching tetrahedra make such faces where the surface passes
+// within float resolution of a mesh node, and extraction then holds each
+// crossing kNodeClearanceUlps (32) ulps off the node (extract_rules.hpp,
+// node_clearance): the crossings around the node form a cluster a few
+// clearances across whose positions the clearance chose, not the field, and
+// the needles between it and the rest of the surface have normals that
+// turn by up to a half turn when one corner of the cluster moves within it.
+// Judging collapses inside such a cluster by those normals refused every way
+// out of it: before the clearance, the cluster stayed as zero-area
+// triangles; with it, as needles. kArtefactUlps covers the
+// cluster's size (a crossing lies up to √3 clearances from its node, two of
+// them up to twice that apart) with a margin; a face that thin still keeps
+// an area float resolves and, once a collapse gives it a normal of its own,
+// must face its leaves' way (legality.hpp). Below kValidQuality the normal
+// is rounding's at any size.
 constexpr double kValidQuality = 1e-5;
+constexpr double kArtefactUlps = 128.0;
+// Under this height a face's area itself is rounding's: a float cross
+// product of its sides may come out 0.
 constexpr double kRoundingUlps = 4.0;
 
 // q and height: quality()'s, for the same corners.
@@ -73,7 +86,27 @@ TETISO_HD inline bool resolved(Vec a, Vec b, Vec c, double q, double height) {
     if (!(q > kValidQuality)) return false;
     const double extent = std::max({std::fabs(a.x), std::fabs(a.y), std::fabs(a.z), std::fabs(b.x), std::fabs(b.y),
                                     std::fabs(b.z), std::fabs(c.x), std::fabs(c.y), std::fabs(c.z)});
-    return height > kRoundingUlps * std::numeric_limits<float>::epsilon() * extent;
+    return height > kArtefactUlps * std::numeric_limits<float>::epsilon() * extent;
+}
+
+// Whether triangle (a, b, c) is an artefact whose area float still
+// resolves: no normal of its own (resolved() false), but a height over its
+// longest side above kRoundingUlps.
+TETISO_HD inline bool resolvable_artefact(Vec a, Vec b, Vec c) {
+    double height;
+    const double q = quality(a, b, c, nullptr, &height);
+    const double extent = std::max({std::fabs(a.x), std::fabs(a.y), std::fabs(a.z), std::fabs(b.x), std::fabs(b.y),
+                                    std::fabs(b.z), std::fabs(c.x), std::fabs(c.y), std::fabs(c.z)});
+    return q > 0 && !resolved(a, b, c, q, height) &&
+           height > kRoundingUlps * std::numeric_limits<float>::epsilon() * extent;
+}
+
+// Whether segment (a, b) is no longer than the artefact scale: a move that
+// short stays inside the cluster of crossings around one node.
+TETISO_HD inline bool within_artefact_scale(Vec a, Vec b) {
+    const double extent = std::max({std::fabs(a.x), std::fabs(a.y), std::fabs(a.z), std::fabs(b.x), std::fabs(b.y),
+                                    std::fabs(b.z)});
+    return norm(b - a) <= kArtefactUlps * std::numeric_limits<float>::epsilon() * extent;
 }
 
 // The same, measuring the triangle first (for the few faces that need it).

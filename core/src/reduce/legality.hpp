@@ -5,7 +5,8 @@
 //  - link condition: the common neighbours of u and w are exactly the
 //    opposite vertices (two inside, one on the border);
 //  - no new edge joins two locked vertices (a piece across an interface may
-//    create the same edge, and seaming would give it 3 or 4 triangles);
+//    create the same edge, and seaming would give it 3 or 4 triangles), and
+//    no face whose corners are all locked changes;
 //  - every vertex keeps at least 3 neighbours (2 on the border), so no
 //    component drops below a tetrahedron; a border loop keeps 3 edges;
 //  - every surviving face of the two leaves keeps its orientation (normal
@@ -13,12 +14,16 @@
 //    mean normal where it had none) and keeps a non-zero area; the smallest
 //    angle over the new faces is at least min(min_angle, the smallest angle
 //    over the old faces), so collapses that remove a degenerate face stay
-//    possible but none makes the worst angle of its region worse. Faces
+//    possible but none makes the worst angle of its region worse (a face
+//    with no normal of its own before and after, geometry.hpp, is held to
+//    an area float resolves instead). Faces
 //    that do not move (around a survivor that stays put) are not judged,
 //    and a valence-3 removal's one new face has no turn test;
 //  - no new contact: faces that share a corner meet nowhere else, among the
 //    new faces and between them and the faces around their outer corners
-//    (see Cones below); contacts the replaced faces had already do not count;
+//    (see Cones below); contacts the replaced faces had already do not count
+//    (contact with faces that share no corner is judged once the round's
+//    operations are chosen: contact_filter.hpp);
 //  - error: the samples of every face of both leaves are re-measured against
 //    the new faces (error_bound.hpp); each must lie within max_error of one
 //    of them (less its own bound from earlier calls), and goes to it. The new
@@ -457,8 +462,16 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
         // No face with a normal of its own (valid) becomes degenerate or
         // turns; one whose normal is rounding's may become degenerate, its
         // own short edge will remove it, and must face the leaves' way only
-        // once the collapse gives it a normal of its own.
-        spoiled = moves && (q_new < q_floor || (!(q_new > 0) && g.valid()) ||
+        // once the collapse gives it a normal of its own. A face that has no
+        // normal of its own before and after (an artefact of the node
+        // clearance, geometry.hpp) is held to an area that float resolves
+        // rather than to the quality floor: when it was its region's worst
+        // face, every way of moving a corner of the cluster made it a little
+        // thinner, and the floor refused them all (the needles along the
+        // border of the paper surface, where a node on a cube face meets the
+        // level).
+        const bool below_floor = q_new < q_floor && !(!g.valid() && resolvable_artefact(p, a, b));
+        spoiled = moves && (below_floor || (!(q_new > 0) && g.valid()) ||
                             (g.valid() ? q_new > 0 && !removes_valence3 && dot(n, g.n()) < m.p.cos_turn
                                        : resolved(p, a, b) && dot(n, nsum) < 0));
         if (faces < NewFan::kMax) {
@@ -557,7 +570,13 @@ TETISO_HD inline bool propose_flip(const RoundView& m, i32 e, const OpsView& ops
     if (m.fans.nn(u) - 1 < (m.border(u) ? 2 : 3) || m.fans.nn(w) - 1 < (m.border(w) ? 2 : 3)) return false;
     for (i32 j = 0, n = m.fans.nn(c); j < n; ++j)
         if (m.fans.nbr(c, j) == d) return false;
-    if (m.s.locked(c) && m.s.locked(d)) return false; // see legal_collapse: no new locked-locked edge
+    // No new locked-locked edge (see connectivity_allows); and, as with a
+    // collapse (which changes only faces around the vertex that moves), no
+    // change to a face whose corners are all locked: a seam's reduction holds
+    // the faces around its region's rim only for the legality tests to read
+    // (reduce_near), and they must come back as they were.
+    const bool locked_edge = m.s.locked(u) && m.s.locked(w);
+    if ((m.s.locked(c) && m.s.locked(d)) || (locked_edge && (m.s.locked(c) || m.s.locked(d)))) return false;
     // No face pushed through its neighbours (see Cones); where a cone does
     // not settle it the flip, an improvement only, is not made.
     if (!inside_cone(m, u, n1) || !inside_cone(m, c, n1) || !inside_cone(m, d, n1) || !inside_cone(m, w, n2) ||

@@ -81,6 +81,9 @@ void check_reduce_options(const ReduceOptions& o) {
     if (!(o.min_angle_degrees >= 0.0 && o.min_angle_degrees <= 30.0))
         bad("min_angle_degrees = " + std::to_string(o.min_angle_degrees) + " is outside [0, 30]");
     if (std::isnan(o.max_error)) bad("max_error is NaN");
+    if (o.obstacles.size() % 9 != 0) bad("obstacles is not nine coordinates per triangle");
+    for (const float c : o.obstacles)
+        if (!std::isfinite(c)) bad("obstacles has a coordinate that is not finite");
     if (!(o.max_normal_turn_degrees > 0.0 && o.max_normal_turn_degrees < 90.0))
         bad("max_normal_turn_degrees = " + std::to_string(o.max_normal_turn_degrees) + " is outside (0, 90)");
     if (!(o.short_edge_ratio >= 0.0 && o.short_edge_ratio < 1.0))

@@ -15,6 +15,8 @@
 //   5. select:    the independent set in priority order (selection.hpp); Φ,
 //                 the position and the legality tests are computed here,
 //                 only for what could still be chosen; then the flips;
+//                 then those chosen whose new faces would meet a face they
+//                 share no corner with are dropped (contact_filter.hpp);
 //   6. apply:     the chosen operations touch disjoint triangles and
 //                 vertices (apply.hpp);
 //   7. compact:   drop removed vertices and triangles, keeping their order
@@ -34,6 +36,7 @@
 #include "../hd.hpp"
 #include "adjacency.hpp"
 #include "apply.hpp"
+#include "contact_filter.hpp"
 #include "criterion.hpp"
 #include "error_bound.hpp"
 #include "legality.hpp"
@@ -56,6 +59,7 @@ struct ReductionState {
     Edges<Exec> edges;
     Array<FaceGeometry> geometry;
     Array<Cone> cones;
+    ContactFilter<Exec> contact;
     Array<u8> kind;
     Array<u32> priority;
     Array<float> px, py, pz, err;
@@ -157,6 +161,7 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
     Surface<Exec>& s = st.s;
     exec.assign(st.changed, s.nv, u8{0});
     exec.assign(st.refused_slots, s.nv, u32{0});
+    load_obstacles(exec, options.obstacles, st.contact);
     const i32 pieces = st.pieces;
     exec.assign(st.piece_done, pieces, u8{0});
     exec.assign(st.piece_idle, pieces, i32{0});
@@ -305,6 +310,9 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
             return k < *offered && kind[offered_list[k]] == kFlip;
         }, st.flips);
         choose<true>(exec, sel, clear_view, st.flips, flips, s.nv, st.priority.data(), chosen, refused, FlipTest{});
+        lap(seconds.select);
+        if (options.contact_test) drop_contacts(exec, st.contact, m, ops, ne, chosen, owner, vertex_piece);
+        lap(seconds.contact);
         // The vertices' answers, and their marks for apply (the round's
         // last reader of the old ones was the classification).
         Compaction<Exec>& c = st.compaction;
@@ -324,7 +332,6 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
             exec.count_into(candidates, [=] TETISO_HD(i64 k) { return kind[list[k]] != kPending; }, kTallyEvaluated);
         }
         stats.candidates = static_cast<std::size_t>(candidates) + static_cast<std::size_t>(flips);
-        lap(seconds.select);
 
         // Samples still to move: those of the flips (a collapse's test moved
         // its samples when it was chosen). A round that chose nothing goes
