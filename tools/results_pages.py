@@ -446,7 +446,16 @@ def soundness(folder):
     # checked it before the node clearance (kept here, since that page now
     # checks later commits' surfaces).
     paper, paper_before = load(folder, "paper-d250-check.json"), load(folder, "paper-d250-before-check.json")
+    # The same job after the reduction learned to merge the clearance's
+    # clusters, with tools/near_degenerate.py's census of what stays.
+    slivers = load(folder, "paper-d250-near-degenerate.json")
+
+    def census_table(rows):
+        return table(["shortest edge", "its ends", "where", "triangles under 1°"],
+                     [[r["scale"], r["node"], r["border"], r["triangles"]] for r in rows])
     return dict(
+        slivers=slivers, slivers_summary=topology_summary(slivers["check"]),
+        slivers_census=census_table(slivers["census"]),
         paper=paper, paper_before=paper_before, paper_summary=topology_summary(paper),
         triage=triage, triage_table=table(
             ["seed: job", "before the clearance: crossing pairs / zero-area / repeated positions", "after"],
