@@ -119,7 +119,14 @@ struct ContactGridView {
 // The cells a box covers, per axis (inclusive ranges), and their number.
 struct CellRange {
     i64 lo[3], hi[3];
-    TETISO_HD i64 count() const { return (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1); }
+    // Saturates (a box across the clamped range would overflow a product of
+    // three 21-bit spans).
+    TETISO_HD i64 count() const {
+        constexpr i64 kMost = i64{1} << 40;
+        i64 n = 1;
+        for (int a = 0; a < 3; ++a) n = std::min(n * (hi[a] - lo[a] + 1), kMost);
+        return n;
+    }
     // Whether the box spans at most two cells per axis: such a triangle
     // goes into the bucket of its lowest cell only.
     TETISO_HD bool small() const { return hi[0] - lo[0] <= 1 && hi[1] - lo[1] <= 1 && hi[2] - lo[2] <= 1; }
@@ -371,9 +378,9 @@ TETISO_HD inline bool triangles_meet(Vec p0, Vec p1, Vec p2, Vec q0, Vec q1, Vec
 }
 
 // Calls f(k) for every entry k (g.triangles[k], g.boxes[k]) whose triangle's
-// box comes within margin of box (and for some others beside it, and for
-// some more than once: f must not depend on being called only once, only for
-// those), until f returns false; whether none did.
+// box comes within margin of box (and for some others beside it: f must not
+// depend on being called only for those), until f returns false; whether
+// none did.
 template <class F>
 TETISO_HD bool for_each_triangle_near(const ContactGridView& g, const Box& box, double margin, const F& f) {
     // The box widened by twice the margin, in float: rounding it (by half a
@@ -402,13 +409,25 @@ TETISO_HD bool for_each_triangle_near(const ContactGridView& g, const Box& box, 
             if (near(g.boxes[k]) && !f(k)) return false;
         return true;
     }
-    // A triangle in several cells, or in a bucket that two of the query's
-    // cells share, is read more than once: rarer, and cheaper, than
-    // finding out.
     for (i64 x = r.lo[0]; x <= r.hi[0]; ++x)
         for (i64 y = r.lo[1]; y <= r.hi[1]; ++y)
-            for (i64 z = r.lo[2]; z <= r.hi[2]; ++z)
-                if (!run(g.bucket(x, y, z))) return false;
+            for (i64 z = r.lo[2]; z <= r.hi[2]; ++z) {
+                const i32 bucket = g.bucket(x, y, z);
+                for (i32 k = g.first[bucket], end = g.first[bucket + 1]; k < end; ++k) {
+                    const FloatBox& b = g.boxes[k];
+                    if (!near(b)) continue;
+                    // A triangle is read once: at the first of its cells that
+                    // the query reads (its lowest cell, or the query's, per
+                    // axis). Without this, a bucket that many of the query's
+                    // cells share (a small surface has few) is read once for
+                    // each of them.
+                    const CellRange own = cells_of(g, b.box());
+                    if (std::max(own.lo[0], r.lo[0]) != x || std::max(own.lo[1], r.lo[1]) != y ||
+                        std::max(own.lo[2], r.lo[2]) != z)
+                        continue;
+                    if (!f(k)) return false;
+                }
+            }
     return true;
 }
 
