@@ -211,14 +211,23 @@ public:
         return kept;
     }
 
+    // rank's and rank_into's common part: flag[i] = keep(i), and rank (n + 1
+    // entries) their exclusive sum, so that rank[n] is the number kept.
+    // (Public: CUDA's extended lambdas may not live in a private member.)
     template <class Keep>
-    i32 rank(i64 n, const Keep& keep, Array<i32>& rank, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
-        const Timed timed(*this, "rank", file, line);
+    const i32* flag_and_rank(i64 n, const Keep& keep, Array<i32>& rank) {
         rank.resize(static_cast<std::size_t>(n) + 1);
         counts_.resize(static_cast<std::size_t>(n) + 1);
         i32* flag = counts_.data();
         cuda::for_each(stream_, n + 1, [=] __device__(i64 i) { flag[i] = i < n && keep(i) ? 1 : 0; });
         scan(flag, rank.data(), n + 1);
+        return flag;
+    }
+
+    template <class Keep>
+    i32 rank(i64 n, const Keep& keep, Array<i32>& rank, const char* file = __builtin_FILE(), int line = __builtin_LINE()) {
+        const Timed timed(*this, "rank", file, line);
+        const i32* flag = flag_and_rank(n, keep, rank);
         i32* r = rank.data();
         const i32 kept = get(rank, n);
         cuda::for_each(stream_, n, [=] __device__(i64 i) {
@@ -234,11 +243,7 @@ public:
     void rank_into(i64 n, const Keep& keep, Array<i32>& rank, int slot, const char* file = __builtin_FILE(),
                    int line = __builtin_LINE()) {
         const Timed timed(*this, "rank_into", file, line);
-        rank.resize(static_cast<std::size_t>(n) + 1);
-        counts_.resize(static_cast<std::size_t>(n) + 1);
-        i32* flag = counts_.data();
-        cuda::for_each(stream_, n + 1, [=] __device__(i64 i) { flag[i] = i < n && keep(i) ? 1 : 0; });
-        scan(flag, rank.data(), n + 1);
+        const i32* flag = flag_and_rank(n, keep, rank);
         i32* r = rank.data();
         i64* kept = tally_.data() + slot;
         cuda::for_each(stream_, std::max<i64>(n, 1), [=] __device__(i64 i) {

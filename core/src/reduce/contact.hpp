@@ -199,14 +199,6 @@ struct ContactGrid {
 
 constexpr int kExtentBins = 256;
 
-// The faces beside the piece that its new faces must stay clear of, for
-// every round (ReduceOptions::obstacles).
-template <class Exec>
-void load_obstacles(Exec& exec, const std::vector<float>& obstacles, ContactGrid<Exec>& cg) {
-    cg.obstacles = static_cast<i32>(obstacles.size() / 9);
-    exec.upload(obstacles, cg.obstacle);
-}
-
 // Builds the grid of the round's faces, the obstacles and the first `made`
 // faces of cg.made: the cell is the power of two at or above the
 // extent of nine in ten triangles (a histogram of their float exponents:
