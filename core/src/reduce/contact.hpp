@@ -28,8 +28,8 @@ namespace tetiso::reduction {
 
 // A triangle whose cells span more than two per axis goes into the bucket
 // of every cell it covers, or, past this many, into one bucket of its own
-// that every query reads (few do: a cell is at least as large as nine in
-// ten of the round's triangles).
+// that every query reads (few do: a cell is at least as large as about nine
+// in ten of the round's triangles).
 constexpr int kMaxCellsPerTriangle = 27;
 // A query spanning more cells than this reads every triangle instead: the
 // answer must not depend on the cell size, which a batch of pieces
@@ -94,6 +94,17 @@ struct ContactTriangle {
     }
 };
 
+// The low 21 bits of x, two zero bits after each (a Morton code's axis).
+TETISO_HD inline u64 spread3(u64 x) {
+    x &= 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffULL;
+    x = (x | x << 16) & 0x1f0000ff0000ffULL;
+    x = (x | x << 8) & 0x100f00f00f00f00fULL;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+    x = (x | x << 2) & 0x1249249249249249ULL;
+    return x;
+}
+
 struct ContactGridView {
     const i32* first;                  // per bucket, its first triangle (groups + 2 entries)
     const FloatBox* boxes;             // grouped by bucket: what a query reads first
@@ -109,10 +120,14 @@ struct ContactGridView {
                : c > static_cast<double>(kCellLimit - 1) ? kCellLimit - 1
                                                          : static_cast<i64>(c);
     }
+    // The cells tile the buckets periodically, in Morton order: the cells a
+    // query reads, and the queries of neighbouring operations, lie in few
+    // runs of memory, and two cells share a bucket only when they are a
+    // whole period apart.
     TETISO_HD i32 bucket(i64 ix, i64 iy, i64 iz) const {
-        const u64 packed = (static_cast<u64>(ix + kCellLimit) << 42) | (static_cast<u64>(iy + kCellLimit) << 21) |
-                           static_cast<u64>(iz + kCellLimit);
-        return static_cast<i32>(mix64(packed) & static_cast<u64>(groups - 1));
+        const u64 code = spread3(static_cast<u64>(ix + kCellLimit)) << 2 |
+                         spread3(static_cast<u64>(iy + kCellLimit)) << 1 | spread3(static_cast<u64>(iz + kCellLimit));
+        return static_cast<i32>(code & static_cast<u64>(groups - 1));
     }
 };
 
@@ -198,10 +213,13 @@ struct ContactGrid {
 };
 
 constexpr int kExtentBins = 256;
+// The cell size is read from this many triangles' extents or more: it sets
+// how fast the grid is, never what a query finds.
+constexpr i64 kExtentSamples = i64{1} << 14;
 
 // Builds the grid of the round's faces, the obstacles and the first `made`
-// faces of cg.made: the cell is the power of two at or above the
-// extent of nine in ten triangles (a histogram of their float exponents:
+// faces of cg.made: the cell is the power of two at or above the extent of
+// nine in ten triangles of a sample (a histogram of their float exponents:
 // integer counts); a triangle spanning at most two cells per axis goes into
 // the bucket of its lowest cell, so that a query reads one cell more below
 // its box; a larger one into the bucket of every cell it covers. Then the
@@ -218,9 +236,13 @@ void build_contact_grid(Exec& exec, const SurfaceView& s, const i32* vertex_piec
     i32* histogram = cg.histogram.data();
     cg.box.resize(static_cast<std::size_t>(total));
     FloatBox* box = cg.box.data();
+    // The histogram counts every stride-th triangle: on the device, every
+    // triangle's increment of one of a few bins queued at that bin's
+    // address.
+    const i64 stride = std::max<i64>(1, total / kExtentSamples), sampled = (total + stride - 1) / stride;
     exec.for_each(total, [=] TETISO_HD(i64 t) {
         box[t] = source(static_cast<i32>(t)).box();
-        hd::atomic_add(histogram + extent_bin(box[t]), 1);
+        if (t % stride == 0) hd::atomic_add(histogram + extent_bin(box[t]), 1);
     });
     std::vector<i32> counts;
     exec.download(cg.histogram, kExtentBins, counts);
@@ -228,7 +250,7 @@ void build_contact_grid(Exec& exec, const SurfaceView& s, const i32* vertex_piec
     int bin = 0;
     for (; bin < kExtentBins - 1; ++bin) {
         seen += counts[static_cast<std::size_t>(bin)];
-        if (10 * seen >= 9 * total) break;
+        if (10 * seen >= 9 * sampled) break;
     }
     // Bin b holds extents below 2^(b - 126); a cell at least that large, and
     // no smaller than 2^-100 (a surface of zero-extent triangles).
@@ -369,57 +391,69 @@ TETISO_HD inline bool triangles_meet(Vec p0, Vec p1, Vec p2, Vec q0, Vec q1, Vec
     return triangles_meet(p0, p1, p2, np, q0, q1, q2);
 }
 
-// Calls f(k) for every entry k (g.triangles[k], g.boxes[k]) whose triangle's
-// box comes within margin of box (and for some others beside it: f must not
-// depend on being called only for those), until f returns false; whether
-// none did.
-template <class F>
-TETISO_HD bool for_each_triangle_near(const ContactGridView& g, const Box& box, double margin, const F& f) {
-    // The box widened by twice the margin, in float: rounding it (by half a
-    // float ulp) cannot leave out a triangle within margin of box.
+// What a query reads: its box widened by twice the margin, in float
+// (rounding it, by half a float ulp, cannot leave out a triangle within the
+// margin of the box), and the cells around that, one more below (a small
+// triangle sits in its lowest cell only); or, where those would be more
+// than kMaxCellsPerQuery, every entry. Its items, read one by one and each
+// on its own: 0, the bucket of the large triangles; then one per cell in
+// x, y, z order (or one for every entry).
+struct ContactQuery {
+    float lo[3], hi[3];
+    CellRange cells;
+    bool every;
+
+    TETISO_HD bool near(const FloatBox& t) const {
+        return !(t.lo[0] > hi[0] || t.hi[0] < lo[0] || t.lo[1] > hi[1] || t.hi[1] < lo[1] || t.lo[2] > hi[2] ||
+                 t.hi[2] < lo[2]);
+    }
+    TETISO_HD i64 items() const { return 1 + (every ? 1 : cells.count()); }
+};
+
+TETISO_HD inline ContactQuery contact_query(const ContactGridView& g, const Box& box, double margin) {
     const double reach = 2.0 * margin;
     const Box wide{{box.lo.x - reach, box.lo.y - reach, box.lo.z - reach},
                    {box.hi.x + reach, box.hi.y + reach, box.hi.z + reach}};
-    const float lo[3] = {static_cast<float>(wide.lo.x), static_cast<float>(wide.lo.y), static_cast<float>(wide.lo.z)};
-    const float hi[3] = {static_cast<float>(wide.hi.x), static_cast<float>(wide.hi.y), static_cast<float>(wide.hi.z)};
-    const auto near = [&](const FloatBox& t) {
-        return !(t.lo[0] > hi[0] || t.hi[0] < lo[0] || t.lo[1] > hi[1] || t.hi[1] < lo[1] || t.lo[2] > hi[2] ||
-                 t.hi[2] < lo[2]);
-    };
-    const auto run = [&](i32 bucket) {
-        for (i32 k = g.first[bucket], end = g.first[bucket + 1]; k < end; ++k)
-            if (near(g.boxes[k]) && !f(k)) return false;
+    ContactQuery q{{static_cast<float>(wide.lo.x), static_cast<float>(wide.lo.y), static_cast<float>(wide.lo.z)},
+                   {static_cast<float>(wide.hi.x), static_cast<float>(wide.hi.y), static_cast<float>(wide.hi.z)},
+                   cells_of(g, wide),
+                   false};
+    for (int a = 0; a < 3; ++a) q.cells.lo[a] = std::max(q.cells.lo[a] - 1, -kCellLimit);
+    q.every = q.cells.count() > kMaxCellsPerQuery;
+    return q;
+}
+
+// Calls f(k) for every entry k (g.triangles[k], g.boxes[k]) of item `item`
+// of query q whose triangle's box comes within the query's margin of its box
+// (and for some others beside it: f must not depend on being called only
+// for those), until f returns false; whether none did. Over all the items,
+// f sees every such triangle of the grid.
+template <class F>
+TETISO_HD bool for_each_entry_of_item(const ContactGridView& g, const ContactQuery& q, i64 item, const F& f) {
+    const auto run = [&](i32 begin, i32 end) {
+        for (i32 k = begin; k < end; ++k)
+            if (q.near(g.boxes[k]) && !f(k)) return false;
         return true;
     };
-    if (!run(g.groups)) return false;
-    // The cells around the widened box, and one cell more below: a small
-    // triangle sits in its lowest cell only.
-    CellRange r = cells_of(g, wide);
-    for (int a = 0; a < 3; ++a) r.lo[a] = std::max(r.lo[a] - 1, -kCellLimit);
-    if (r.count() > kMaxCellsPerQuery) {
-        for (i32 k = 0, end = g.first[g.groups]; k < end; ++k)
-            if (near(g.boxes[k]) && !f(k)) return false;
-        return true;
+    if (item == 0) return run(g.first[g.groups], g.first[g.groups + 1]);
+    if (q.every) return run(0, g.first[g.groups]);
+    const CellRange& r = q.cells;
+    const i64 sy = r.hi[1] - r.lo[1] + 1, sz = r.hi[2] - r.lo[2] + 1, c = item - 1;
+    const i64 x = r.lo[0] + c / (sy * sz), y = r.lo[1] + (c / sz) % sy, z = r.lo[2] + c % sz;
+    const i32 bucket = g.bucket(x, y, z);
+    for (i32 k = g.first[bucket], end = g.first[bucket + 1]; k < end; ++k) {
+        const FloatBox& b = g.boxes[k];
+        if (!q.near(b)) continue;
+        // A triangle is read once: at the first of its cells that the query
+        // reads (its lowest cell, or the query's, per axis). Without this, a
+        // bucket that many of the query's cells share (a small surface has
+        // few) is read once for each of them.
+        const CellRange own = cells_of(g, b.box());
+        if (std::max(own.lo[0], r.lo[0]) != x || std::max(own.lo[1], r.lo[1]) != y ||
+            std::max(own.lo[2], r.lo[2]) != z)
+            continue;
+        if (!f(k)) return false;
     }
-    for (i64 x = r.lo[0]; x <= r.hi[0]; ++x)
-        for (i64 y = r.lo[1]; y <= r.hi[1]; ++y)
-            for (i64 z = r.lo[2]; z <= r.hi[2]; ++z) {
-                const i32 bucket = g.bucket(x, y, z);
-                for (i32 k = g.first[bucket], end = g.first[bucket + 1]; k < end; ++k) {
-                    const FloatBox& b = g.boxes[k];
-                    if (!near(b)) continue;
-                    // A triangle is read once: at the first of its cells that
-                    // the query reads (its lowest cell, or the query's, per
-                    // axis). Without this, a bucket that many of the query's
-                    // cells share (a small surface has few) is read once for
-                    // each of them.
-                    const CellRange own = cells_of(g, b.box());
-                    if (std::max(own.lo[0], r.lo[0]) != x || std::max(own.lo[1], r.lo[1]) != y ||
-                        std::max(own.lo[2], r.lo[2]) != z)
-                        continue;
-                    if (!f(k)) return false;
-                }
-            }
     return true;
 }
 
