@@ -83,6 +83,9 @@ struct ContactTriangle {
     i32 op;
     TETISO_HD Vec corner(int c) const { return {at[3 * c], at[3 * c + 1], at[3 * c + 2]}; }
     TETISO_HD bool obstacle() const { return id[0] == -2; }
+    // A vertex of the piece, for a face of the round or a made one (whose
+    // new vertex is none).
+    TETISO_HD i32 vertex() const { return id[0] >= 0 ? id[0] : id[1]; }
     TETISO_HD bool made() const { return op >= 0; }
     TETISO_HD FloatBox box() const {
         FloatBox b;

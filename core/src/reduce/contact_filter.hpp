@@ -95,32 +95,15 @@ TETISO_HD inline bool chosen_before(const OpsView& ops, const EdgesView& edges, 
 
 TETISO_HD inline bool same(Vec a, Vec b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
 
-// A new face as drop_contacts lays it out among the grid's made faces (a
-// collapse's new vertex, -3 there, moved from first to last), read back in
-// for_each_new_face's order and numbering (-1 for that vertex): the tests
-// below then round as they would on the face itself.
-struct FaceCorners {
-    i32 id[3];
-    Vec at[3];
-};
-TETISO_HD inline FaceCorners corners_of_made(const ContactTriangle& t) {
-    const int shift = t.id[2] == -3 ? 2 : 0;
-    FaceCorners f;
-    for (int c = 0; c < 3; ++c) {
-        const int from = (c + shift) % 3;
-        f.id[c] = t.id[from] == -3 ? -1 : t.id[from];
-        f.at[c] = t.corner(from);
-    }
-    return f;
-}
-
 // Whether triangle t of the grid is one that face f shares a corner with:
 // by vertex, or for an obstacle (whose corners are no vertices of the
 // piece; a locked rim vertex keeps its position bit for bit) by position.
-TETISO_HD inline bool shares_corner(const FaceCorners& f, const ContactTriangle& t) {
+// f: a new face as drop_contacts lays it out among the grid's made faces.
+TETISO_HD inline bool shares_corner(const ContactTriangle& f, const ContactTriangle& t) {
     for (int c = 0; c < 3; ++c) {
         if (t.obstacle()) {
-            if (same(f.at[c], t.corner(0)) || same(f.at[c], t.corner(1)) || same(f.at[c], t.corner(2))) return true;
+            const Vec at = f.corner(c);
+            if (same(at, t.corner(0)) || same(at, t.corner(1)) || same(at, t.corner(2))) return true;
         } else if (f.id[c] >= 0 && (f.id[c] == t.id[0] || f.id[c] == t.id[1] || f.id[c] == t.id[2])) {
             return true;
         }
@@ -198,10 +181,10 @@ struct ContactJudge {
             } else if (!t.obstacle() && replaced(t)) {
                 return true;
             }
-            if (!t.obstacle() && g.vertex_piece && g.vertex_piece[t.id[0]] != piece) return true;
+            if (!t.obstacle() && g.vertex_piece && g.vertex_piece[t.vertex()] != piece) return true;
             const Box tb = g.boxes[entry].box();
             for (u32 j = begin; j < end; ++j) {
-                if (made_box[j].box().apart(tb, q.margin) || shares_corner(corners_of_made(made[j]), t)) continue;
+                if (made_box[j].box().apart(tb, q.margin) || shares_corner(made[j], t)) continue;
                 if (!visit(j, entry)) return false;
             }
             return true;
@@ -212,10 +195,10 @@ struct ContactJudge {
     // the grid, and did not through a face it replaces.
     TETISO_HD bool new_contact(i32 k, u32 j, i32 entry) const {
         const ContactTriangle& t = g.triangles[entry];
-        const FaceCorners f = corners_of_made(made[j]);
+        const Vec f0 = made[j].corner(0), f1 = made[j].corner(1), f2 = made[j].corner(2);
         Vec n;
-        quality(f.at[0], f.at[1], f.at[2], &n);
-        if (!triangles_meet(f.at[0], f.at[1], f.at[2], n, t.corner(0), t.corner(1), t.corner(2))) return false;
+        quality(f0, f1, f2, &n);
+        if (!triangles_meet(f0, f1, f2, n, t.corner(0), t.corner(1), t.corner(2))) return false;
         return t.made() || !had_met(m, ops, list[k], static_cast<i32>(j - first_face[k]), t);
     }
 
@@ -287,16 +270,14 @@ void drop_contacts(Exec& exec, ContactFilter<Exec>& cf, const RoundView& m, cons
         const i32 e = list[k];
         u32 at = first[k];
         for_each_new_face(m, ops, e, [&](const NewFace& f) {
-            // A collapse's new vertex last, so that corner 0 is a vertex
-            // of the piece (the grid reads its piece there).
-            const int shift = f.id[0] < 0 ? 1 : 0;
+            // In for_each_new_face's order, so that the tests round as they
+            // would on the face itself.
             ContactTriangle& t = made[at++];
             for (int c = 0; c < 3; ++c) {
-                const int from = (c + shift) % 3;
-                t.id[c] = f.id[from] < 0 ? -3 : f.id[from];
-                t.at[3 * c] = static_cast<float>(f.at[from].x);
-                t.at[3 * c + 1] = static_cast<float>(f.at[from].y);
-                t.at[3 * c + 2] = static_cast<float>(f.at[from].z);
+                t.id[c] = f.id[c] < 0 ? -3 : f.id[c];
+                t.at[3 * c] = static_cast<float>(f.at[c].x);
+                t.at[3 * c + 1] = static_cast<float>(f.at[c].y);
+                t.at[3 * c + 2] = static_cast<float>(f.at[c].z);
             }
             t.op = e;
         });
