@@ -190,6 +190,7 @@ void run_job(const RunArguments& args) {
         {"device", c.device == JobConfig::Device::gpu ? (c.gpu >= 0 ? "gpu " + std::to_string(c.gpu) : std::string("gpu"))
                    : c.device == JobConfig::Device::automatic ? std::string("auto") : std::string("cpu")},
         {"devices", device_summary(result->tasks)},
+        {"cpu_probe_seconds_per_triangle", result->cpu_seconds_per_triangle},
         {"spacing", partition.spacing()},
         {"nodes", partition.node_count()},
         {"tets", partition.tet_count()},

@@ -108,6 +108,26 @@ void Job::prepare_gpu(int index) const {
     run_domain_tasks(two, both, options);
 }
 
+double Job::probe_cpu() const {
+    // The paper's field on a small lattice, one domain reduced on one thread
+    // with the job's bound in that lattice's spacings: a rate per raw
+    // triangle near a domain task's on the same core (kCpuProbeLattice),
+    // which NodePlacement scales by the domains' triangle count.
+    const LatticePartition probe(kCpuProbeLattice, 1, make_field("paper"));
+    DomainTaskOptions options;
+    options.level = static_cast<float>(probe.field().default_level());
+    options.threads = 1;
+    if (config_.reduce) {
+        options.reduce = reduce_options(TaskThreads{1, {}, -1});
+        if (config_.max_error_spacings > 0) options.reduce->max_error = config_.max_error_spacings * probe.spacing();
+        options.reduce->keep_samples = true;
+    }
+    const auto started = std::chrono::steady_clock::now();
+    const DomainTaskResult done = run_domain_task(probe, 0, options);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    return seconds / static_cast<double>(std::max<std::size_t>(1, done.triangles_extracted));
+}
+
 std::string Job::describe(int task) const {
     const TaskNode& n = node(task);
     if (n.count == 1) return partition_->domain_name(n.first);

@@ -78,6 +78,8 @@ JobResult run_local(const Job& job, const Progress& progress) {
     if (job.config().device != JobConfig::Device::cpu) {
         const std::vector<int> gpus = NodePlacement::usable_gpus(job.config(), gpu_count());
         setup.nodes = single_process_layout(gpus, gpus.empty() ? 0.0 : gpu_memory_mib(gpus.front()));
+        if (job.config().device == JobConfig::Device::automatic && !gpus.empty())
+            setup.cpu_seconds_per_triangle = job.probe_cpu();
     }
     Scheduler scheduler(job, setup);
     LocalTransport transport(job, scheduler.places_tasks());

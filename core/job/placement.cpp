@@ -25,7 +25,7 @@ std::vector<ManagedDevice> node_devices(int cpu_processes, const std::vector<int
 } // namespace
 
 NodePlacement::NodePlacement(const Job& job, int cpu_processes, const std::vector<int>& gpus, double gpu_mib,
-                             bool domains_on_cpu)
+                             bool domains_on_cpu, double cpu_seconds_per_triangle)
     : manager(node_devices(cpu_processes, gpus)),
       job_(job),
       domain_tets_(std::max(1.0, static_cast<double>(job.partition().tet_count()) / job.partition().domain_count())),
@@ -34,7 +34,38 @@ NodePlacement::NodePlacement(const Job& job, int cpu_processes, const std::vecto
       domains_on_cpu_(domains_on_cpu),
       batch_limit_(static_cast<int>(std::clamp(std::floor(usable_mib_ / task_mib_), 1.0,
                                                static_cast<double>(job.config().gpu_batch > 0 ? job.config().gpu_batch
-                                                                                              : kDefaultGpuBatch)))) {}
+                                                                                              : kDefaultGpuBatch)))),
+      cpu_seconds_per_triangle_(cpu_seconds_per_triangle) {}
+
+bool NodePlacement::cpu_takes(TaskKind kind) const {
+    if (kind == TaskKind::seam) return true;
+    if (!domains_on_cpu_) return false;
+    // Waiting for the prior only makes sense where a GPU could take the task.
+    const bool gpu_fits = manager.devices().size() > 1 && task_mib_ <= usable_mib_;
+    if (!gpu_fits || !(cpu_seconds_per_triangle_ > 0)) return true;
+    const int domain = static_cast<int>(TaskKind::domain);
+    if (!manager.has_prior(domain, 0) && !manager.model(domain, 0)) return false;
+    // Nor before each GPU has run batches of two sizes: until then its
+    // batches are assumed to take their tasks' time one after another, often
+    // several times too long, and the cores would take domains the GPUs end
+    // first.
+    if (batch_limit_ <= 1) return true;
+    for (std::size_t d = 1; d < manager.devices().size(); ++d) {
+        const PerformanceModel* m = manager.model(domain, static_cast<int>(d));
+        if (!m || m->sizes() < 2) return false;
+    }
+    return true;
+}
+
+void NodePlacement::learn_domain_triangles(double raw_triangles) {
+    domain_triangles_ += std::max(raw_triangles, 0.0);
+    ++domains_ended_;
+    if (!(cpu_seconds_per_triangle_ > 0) || !domains_on_cpu_) return;
+    // An empty domain still costs its generation and extraction: at least one
+    // triangle's worth, so that the prior stays a time.
+    const double triangles = std::max(1.0, domain_triangles_ / domains_ended_);
+    manager.set_prior(static_cast<int>(TaskKind::domain), 0, cpu_seconds_per_triangle_ * triangles / domain_tets_);
+}
 
 void NodePlacement::finish(const Grant& grant, double seconds, TaskRecord& record) {
     const double transfer = record.stages.upload + record.stages.download;
@@ -68,7 +99,7 @@ ResourceRequest NodePlacement::request(int task, const Piece* left, const Piece*
     // Domains differ little in size (bisection or METIS balances them):
     // the mean is the task's size, and the models see each kind of task.
     r.size = domain_tets_;
-    if (!domains_on_cpu_) r.units[0] = 0;
+    if (!cpu_takes(TaskKind::domain)) r.units[0] = 0;
     const bool fits = task_mib_ <= usable_mib_;
     for (std::size_t d = 1; d < r.units.size(); ++d) r.units[d] = fits ? 1 : 0;
     r.batch.assign(r.units.size(), std::clamp(most_in_batch, 1, batch_limit_));

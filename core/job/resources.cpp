@@ -16,6 +16,8 @@ void PerformanceModel::add(double size, double seconds) {
     ++h.count;
     h.sum += seconds;
     ++samples_;
+    total_ += seconds;
+    total_size_ += size;
     const double x = std::log(size), y = std::log(seconds);
     sx_ += x;
     sy_ += y;
@@ -30,13 +32,10 @@ std::optional<double> PerformanceModel::predict(double size) const {
     if (samples_ < kMinSamples) return std::nullopt;
     const double n = samples_;
     const double spread = n * sxx_ - sx_ * sx_;
-    // One size only (or sizes too close to tell apart): its mean is all
-    // there is to go by.
-    if (by_size_.size() < 2 || spread <= 1e-12 * n * n) {
-        double sum = 0;
-        for (const auto& [s, h] : by_size_) sum += h.sum;
-        return sum / n;
-    }
+    // One size only (or sizes too close to tell apart): in proportion to
+    // size, as a batch counts as its tasks one after another (a GPU that has
+    // only run batches of 8 takes one task in an eighth of the time).
+    if (by_size_.size() < 2 || spread <= 1e-12 * n * n) return *rate() * size;
     const double b = (n * sxy_ - sx_ * sy_) / spread;
     const double log_a = (sy_ - b * sx_) / n;
     return std::exp(log_a + b * std::log(size));
@@ -57,19 +56,36 @@ const PerformanceModel* ResourceManager::model(int kind, int device) const {
     return it == models_.end() ? nullptr : &it->second;
 }
 
+std::optional<double> ResourceManager::estimate(int kind, double size, int device) const {
+    if (const PerformanceModel* m = model(kind, device)) {
+        if (const auto seconds = m->predict(size)) return seconds;
+        // Too few to trust, but measured here: nearer the truth than any
+        // guess (a GPU's first task can be fifty times faster than the CPU's
+        // prior).
+        if (const auto rate = m->rate()) return *rate * std::max(size, 1.0);
+    }
+    if (const auto it = priors_.find({kind, device}); it != priors_.end()) return it->second * std::max(size, 1.0);
+    return std::nullopt;
+}
+
+void ResourceManager::set_prior(int kind, int device, double seconds_per_size) {
+    if (!(seconds_per_size > 0) || !std::isfinite(seconds_per_size))
+        throw Error("a prior of " + std::to_string(seconds_per_size) + " s per unit of size is not a time");
+    priors_[{kind, device}] = seconds_per_size;
+}
+
 double ResourceManager::predict(int kind, double size, int device) const {
     const auto d = static_cast<std::size_t>(device);
     const double transfer =
         (transfer_size_[d] > 0 ? transfer_seconds_[d] / transfer_size_[d] : devices_[d].transfer_per_size) * size;
-    if (const PerformanceModel* m = model(kind, device))
-        if (const auto seconds = m->predict(size)) return *seconds + transfer;
-    // Uncalibrated here: somewhat faster than the fastest device that knows
+    if (const auto seconds = estimate(kind, size, device)) return *seconds + transfer;
+    // Nothing known here: somewhat faster than the fastest device that knows
     // the task, so that this one is tried and learns, but is not flooded
     // meanwhile with tasks each thought to take nothing.
     std::optional<double> fastest;
-    for (const auto& [key, m] : models_)
-        if (key.first == kind)
-            if (const auto seconds = m.predict(size)) fastest = std::min(fastest.value_or(*seconds), *seconds);
+    for (std::size_t other = 0; other < devices_.size(); ++other)
+        if (const auto seconds = estimate(kind, size, static_cast<int>(other)))
+            fastest = std::min(fastest.value_or(*seconds), *seconds);
     return (fastest ? *fastest / kUncalibratedSpeedup : kUncalibratedSeconds) + transfer;
 }
 
@@ -159,12 +175,16 @@ Grant ResourceManager::request(const ResourceRequest& request, double now) {
     if (best.device < 0) throw Error("no device of the node can hold a task of size " + std::to_string(request.size));
     // The device chosen takes a batch: as many tasks as end no later than
     // the task would alone elsewhere (all it may take where nowhere else can).
-    // Where the task could run alone elsewhere, a device whose model of it
-    // is not calibrated yet takes one: its guess could be far off, and one
-    // task teaches it the most.
+    // Where the task could run alone elsewhere, a device that has not run
+    // the task yet takes one: its guess could be far off, and one task
+    // teaches it the most; one that has run only batches of one size takes
+    // at most kLearningBatch, which teaches it how a batch's time grows.
     const PerformanceModel* known = model(request.kind, best.device);
-    const bool calibrated = known && known->samples() >= PerformanceModel::kMinSamples;
-    const int most_here = std::isfinite(alone_end) && !calibrated ? 1 : most(static_cast<std::size_t>(best.device));
+    int most_here = most(static_cast<std::size_t>(best.device));
+    if (std::isfinite(alone_end)) {
+        if (!known) most_here = 1;
+        else if (known->sizes() < 2) most_here = std::min(most_here, kLearningBatch);
+    }
     for (int count = most_here; count > 1; --count) {
         const Grant g = candidate(request, best.device, count, now);
         if (g.start + g.predicted_seconds <= alone_end) {

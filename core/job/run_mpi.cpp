@@ -39,6 +39,10 @@ JobResult control(const Job& job, int ranks, const Progress& progress, const std
     setup.seams_here = true;
     setup.nodes = nodes;
     setup.task_timeout = job.config().task_timeout;
+    // Rank 0 has nothing to do until the workers are ready, the GPUs' drivers
+    // longest: the probe costs the job nothing.
+    const bool gpus = nodes && std::any_of(nodes->gpus.begin(), nodes->gpus.end(), [](const auto& g) { return !g.empty(); });
+    if (gpus && job.config().device == JobConfig::Device::automatic) setup.cpu_seconds_per_triangle = job.probe_cpu();
     Scheduler scheduler(job, setup);
     MpiTransport transport(ranks, setup.task_timeout);
     cpu_set_t own_cores;

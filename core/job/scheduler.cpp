@@ -37,6 +37,7 @@ Scheduler::Scheduler(const Job& job, SchedulerSetup setup)
       cores_known_(static_cast<std::size_t>(setup_.ranks), false), lent_to_(static_cast<std::size_t>(setup_.ranks), -1),
       size_sent_(static_cast<std::size_t>(job.task_count()), 1.0) {
     result_.ranks = setup_.ranks;
+    result_.cpu_seconds_per_triangle = setup_.cpu_seconds_per_triangle;
     if (!setup_.nodes) return;
     const NodeLayout& nodes = *setup_.nodes;
     node_of_ = nodes.node_of;
@@ -51,7 +52,7 @@ Scheduler::Scheduler(const Job& job, SchedulerSetup setup)
     }
     for (std::size_t node = 0; node < nodes.gpus.size(); ++node) {
         placements_.emplace_back(job, nodes.workers[node] - drivers[node], nodes.gpus[node], nodes.gpu_mib[node],
-                                 domains_on_cpu);
+                                 domains_on_cpu, setup_.cpu_seconds_per_triangle);
         gpu_slots_ += static_cast<int>(nodes.gpus[node].size());
     }
 }
@@ -139,6 +140,8 @@ TaskRecord Scheduler::completed(const ResultMessage& result, int rank, double st
 // readied.
 void Scheduler::keep_result(int task, Piece made, double seconds, TaskRecord record) {
     learn(task, size_sent_[static_cast<std::size_t>(task)], seconds);
+    if (record.kind == TaskKind::domain)
+        for (NodePlacement& placement : placements_) placement.learn_domain_triangles(static_cast<double>(record.triangles_in));
     piece(task) = std::move(made);
     result_.tasks.push_back(record);
     queue_.complete(task);
@@ -349,8 +352,20 @@ int Scheduler::driver_of(int node, int device) const {
 int Scheduler::node_with_room() const {
     std::map<int, int> free_workers; // node -> idle workers that drive no GPU, less the grants waiting for one
     std::map<int, int> waiting_for;  // driver -> grants waiting for it
+    // An idle worker of a node whose CPU may not take the next task (it waits
+    // for its prior) is no room: placing would only queue the task on a GPU
+    // whose model is still the guess of its first tasks. Unless a GPU of the
+    // node has no driver: the worker runs its grants (a single process).
+    const TaskKind next = job_.kind(queue_.peek());
+    const auto room_for_next = [&](int node) {
+        const NodePlacement& placement = placements_[static_cast<std::size_t>(node)];
+        if (placement.cpu_takes(next)) return true;
+        for (int d = 1; d < static_cast<int>(placement.manager.devices().size()); ++d)
+            if (driver_of(node, d) < 0) return true;
+        return false;
+    };
     for (const int worker : idle_)
-        if (!drives_gpu(worker)) ++free_workers[node_of_[at(worker)]];
+        if (!drives_gpu(worker) && room_for_next(node_of_[at(worker)])) ++free_workers[node_of_[at(worker)]];
     for (const Placed& p : waiting_) {
         if (const int driver = driver_of(p.node, p.grant.device); driver >= 0)
             ++waiting_for[driver];

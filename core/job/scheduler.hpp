@@ -65,6 +65,10 @@ struct SchedulerSetup {
     std::optional<NodeLayout> nodes;
     // The shortest deadline a task gets, in seconds; 0: no deadline.
     double task_timeout = 0;
+    // With nodes: the CPU's speed as Job::probe_cpu measured it, seconds per
+    // raw triangle on one core; 0: not measured (NodePlacement says how it
+    // is used).
+    double cpu_seconds_per_triangle = 0;
 };
 
 // Why the job failed: a task that threw, or a rank that stopped answering.

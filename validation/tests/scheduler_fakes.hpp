@@ -61,6 +61,7 @@ public:
     std::function<double(int task, int worker)> duration = [](int, int) { return 1.0; };
     std::set<int> stopped, failing;
     bool execute = false;
+    std::size_t raw_triangles = 0; // what a domain task's record says it extracted, without `execute`
     int silent_at_stop = -1; // a worker that does not answer the stop
 
     void send_task(int worker, TaskMessage message) override {
@@ -76,6 +77,7 @@ public:
             event.kind = WorkerEvent::Kind::result;
             TaskRecord record;
             record.task = message.task;
+            record.triangles_in = raw_triangles;
             Piece piece = execute ? job_.execute(message.task, message.left ? &*message.left : nullptr,
                                                  message.right ? &*message.right : nullptr, record,
                                                  TaskThreads{1, {}, {}})
@@ -110,6 +112,7 @@ public:
             } else {
                 for (std::size_t i = 0; i < tasks.size(); ++i) {
                     records[i].task = tasks[i];
+                    records[i].triangles_in = raw_triangles;
                     pieces.push_back(piece_of(10));
                 }
             }

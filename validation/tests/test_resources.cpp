@@ -160,6 +160,28 @@ TEST(ResourceManager, RunningTasksBoundAnUncalibratedGuess) {
     EXPECT_DOUBLE_EQ(manager.request({kDomain, 10, {1, 0}}, 100).predicted_seconds, 2.0);
 }
 
+// A prior stands for a device until its first sample; its own first
+// samples, too few to trust, stand for it before any other device's guess.
+TEST(ResourceManager, APriorStandsUntilTheDevicesOwnSamples) {
+    ResourceManager manager({cpu(2), gpu(0, 1)});
+    EXPECT_THROW(manager.set_prior(kDomain, kCpu, 0), Error);
+    manager.set_prior(kDomain, kCpu, 0.01);
+    EXPECT_TRUE(manager.has_prior(kDomain, kCpu));
+    EXPECT_FALSE(manager.has_prior(kDomain, kGpu));
+    EXPECT_DOUBLE_EQ(manager.predict(kDomain, 100, kCpu), 1.0);
+    // The GPU, with nothing of its own, is guessed faster than the CPU's prior.
+    EXPECT_DOUBLE_EQ(manager.predict(kDomain, 100, kGpu), 1.0 / ResourceManager::kUncalibratedSpeedup);
+    // One sample on the GPU: its time, not the guess.
+    calibrate(manager, kGpu, 100, 0.05, 1);
+    EXPECT_DOUBLE_EQ(manager.predict(kDomain, 100, kGpu), 0.05);
+    const Grant g = manager.request({kDomain, 100, {1, 1}}, 10);
+    EXPECT_EQ(g.device, kGpu);
+    manager.cancel(g.ticket);
+    // One sample on the CPU replaces its prior.
+    calibrate(manager, kCpu, 100, 3.0, 1);
+    EXPECT_DOUBLE_EQ(manager.predict(kDomain, 100, kCpu), 3.0);
+}
+
 TEST(ResourceManager, UsesSeveralGpus) {
     ResourceManager manager({cpu(8), gpu(0, 100), gpu(1, 100)});
     calibrate(manager, kCpu, 10, 1.0);
@@ -209,9 +231,18 @@ TEST(ResourceManager, UntilTwoBatchSizesAreSeenABatchTakesItsTasksInTurn) {
     ResourceManager manager({cpu(1), gpu(0, 1)});
     calibrate(manager, kCpu, 10, 1.04);
     calibrate(manager, kGpu, 10, 0.1); // one size: no fit over sizes
+    // Ten tasks one after another would end with the CPU's one; the batch
+    // stops at kLearningBatch, which teaches the GPU a second size.
     const Grant a = manager.request({kDomain, 10, {1, 1}, {1, 32}}, 0);
     EXPECT_EQ(a.device, kGpu);
-    EXPECT_EQ(a.count, 10);
+    EXPECT_EQ(a.count, ResourceManager::kLearningBatch);
+    EXPECT_NEAR(a.predicted_seconds, 0.1 * ResourceManager::kLearningBatch, 1e-9);
+    ASSERT_TRUE(manager.start(a.ticket, 0));
+    manager.finish(a.ticket, 0.2);
+    // Two sizes: the fit says a batch of ten ends long before the CPU's task.
+    const Grant b = manager.request({kDomain, 10, {1, 1}, {1, 32}}, 1);
+    EXPECT_EQ(b.device, kGpu);
+    EXPECT_GT(b.count, 10);
     // Nothing known of the GPU: it takes one task at a time, to learn,
     // while the CPU could take the task.
     ResourceManager fresh({cpu(1), gpu(0, 1)});

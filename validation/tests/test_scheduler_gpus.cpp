@@ -180,6 +180,69 @@ TEST(Scheduler, UnderAutoTheCpuKeepsDomainsAndTheGpusTakeBatches) {
         }
 }
 
+// With the CPU's probe (Job::probe_cpu), no CPU worker takes a domain until
+// a first domain task has ended: then the probe's rate times its raw
+// triangles is the CPU's prior. A small job the GPUs end before a CPU task
+// could stays on the GPUs; a job on slow GPUs gives the CPU domains, only
+// after that first result.
+TEST(Scheduler, UnderAutoTheCpuWaitsForItsPriorBeforeItTakesADomain) {
+    JobConfig config = lattice_job(24, 16);
+    config.device = JobConfig::Device::automatic;
+    const Job job(config);
+    const auto run = [&](double gpu_seconds, double probe) {
+        FakeTransport transport(job, {1, 2, 3, 4}, true);
+        transport.raw_triangles = 10000;
+        // A CPU worker takes what the probe says: 1e-4 s x 10,000 triangles.
+        transport.duration = [gpu_seconds](int, int worker) { return worker <= 2 ? gpu_seconds : 1.0; };
+        SchedulerSetup setup = two_gpus_setup();
+        setup.cpu_seconds_per_triangle = probe;
+        Scheduler scheduler(job, setup);
+        const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.1));
+        EXPECT_TRUE(result.has_value());
+        EXPECT_DOUBLE_EQ(result ? result->cpu_seconds_per_triangle : -1, probe);
+        return transport.sent;
+    };
+    const auto domains_on_cpu = [&](const std::vector<FakeTransport::Sent>& sent) {
+        std::vector<double> at;
+        for (const FakeTransport::Sent& s : sent)
+            if (job.kind(s.task) == TaskKind::domain && s.worker > 2) at.push_back(s.at);
+        return at;
+    };
+    // GPUs 20 times faster than a core: 16 domains take them 0.4 s, less
+    // than one domain on a core.
+    EXPECT_TRUE(domains_on_cpu(run(0.05, 1e-4)).empty());
+    // Without the probe the idle cores take domains at once, as they always
+    // did: those are what the job then waits for.
+    const std::vector<double> blind = domains_on_cpu(run(0.05, 0));
+    ASSERT_FALSE(blind.empty());
+    EXPECT_EQ(blind.front(), 0.0);
+    // GPUs three times slower than a core: the CPU takes domains, from the
+    // end of the first GPU task on.
+    const std::vector<double> slow = domains_on_cpu(run(3.0, 1e-4));
+    ASSERT_FALSE(slow.empty());
+    for (const double at : slow) EXPECT_GE(at, 3.0);
+}
+
+// The single process of a job without MPI drives no GPU: its one worker
+// runs the GPU's grants too, so it is room for them while the CPU waits for
+// its prior.
+TEST(Scheduler, ASingleProcessWaitingForTheCpusPriorRunsTheGpusGrants) {
+    JobConfig config = lattice_job(12, 8);
+    config.device = JobConfig::Device::automatic;
+    const Job job(config);
+    FakeTransport transport(job, {0}, false);
+    transport.raw_triangles = 10000;
+    transport.duration = [](int, int) { return 0.1; };
+    SchedulerSetup setup;
+    setup.nodes = single_process_layout({0}, 80000);
+    setup.cpu_seconds_per_triangle = 1e-4;
+    Scheduler scheduler(job, setup);
+    const std::optional<JobResult> result = drive(job, scheduler, transport, DriveHooks{});
+    ASSERT_TRUE(result.has_value());
+    EXPECT_EQ(result->tasks.size(), static_cast<std::size_t>(job.task_count()));
+    EXPECT_EQ(transport.sent.front().gpu, 0) << "the first domain task, on the GPU";
+}
+
 TEST(Scheduler, AFailureInsideABatchNamesItsTask) {
     JobConfig config = lattice_job(24, 64);
     config.gpu_batch = 8;

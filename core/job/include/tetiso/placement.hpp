@@ -16,6 +16,20 @@
 // a GPU and the safe one: its memory holds one task's buffers. The memory a
 // task needs is therefore not a counter but a condition: a domain whose
 // estimate does not fit the GPU may only run on the CPU.
+//
+// The CPU's prior. A domain takes a core seconds and a GPU a tenth of one:
+// where every idle core took a domain before any model was calibrated, the
+// job could not end before those tasks did, though the GPUs could have done
+// them all by then. So where a GPU may take domain tasks and the job measured
+// the CPU's speed at start-up (Job::probe_cpu: seconds per raw triangle of a
+// small reduction on one core), the CPU takes no domain task until a first
+// domain task has ended somewhere and each GPU has run batches of two sizes
+// (the manager caps a GPU's second grant at kLearningBatch tasks, so that
+// this takes a fraction of a second). The first domain task says how many
+// raw triangles a domain has, and the CPU's prior for a domain task is the
+// probe's rate times that count (the mean of the domain tasks ended so far);
+// its own tasks replace the prior as they end. The cores wait at most about
+// one GPU batch at the start.
 #pragma once
 
 #include <vector>
@@ -50,8 +64,10 @@ public:
     // node's tasks may use, of `gpu_mib` each (the first usable one's);
     // `domains_on_cpu`: false under --device gpu, where domain tasks run on
     // a GPU only (seams always run on the CPU).
+    // `cpu_seconds_per_triangle`: the probe's rate, 0 where there was none
+    // (the CPU then learns from its own first tasks, taken at once).
     NodePlacement(const Job& job, int cpu_processes, const std::vector<int>& gpus, double gpu_mib,
-                  bool domains_on_cpu = true);
+                  bool domains_on_cpu = true, double cpu_seconds_per_triangle = 0);
 
     // The request a task makes: a domain task one CPU process or one slot on
     // any GPU whose memory holds it, where it may come with up to
@@ -59,6 +75,14 @@ public:
     // CPU process. Throws tetiso::Error when a domain may run on a GPU only
     // and fits none.
     ResourceRequest request(int task, const Piece* left, const Piece* right, int most_in_batch = 1) const;
+
+    // Whether the CPU may take a task of this kind now: a seam always; a
+    // domain task under --device auto unless the CPU waits for its prior
+    // (above).
+    bool cpu_takes(TaskKind kind) const;
+    // A domain task ended with `raw_triangles` extracted (on any node): the
+    // CPU's prior follows the mean.
+    void learn_domain_triangles(double raw_triangles);
 
     // The most domain tasks a GPU grant may carry: --gpu-batch, and what the
     // GPU's memory holds by the estimate (at least 1).
@@ -89,6 +113,9 @@ private:
     double usable_mib_; // a GPU's memory less its context and a margin
     bool domains_on_cpu_;
     int batch_limit_;
+    double cpu_seconds_per_triangle_;
+    double domain_triangles_ = 0; // raw triangles of the domain tasks ended so far
+    int domains_ended_ = 0;
 };
 
 } // namespace tetiso

@@ -7,7 +7,8 @@
 // whatever units the caller counts (placement.hpp: CPU worker processes, and
 // one task slot per GPU). The manager predicts the task's seconds τ_i on each
 // device from the tasks that finished there (PerformanceModel; while a
-// device has too few, no less than its tasks of that kind have been running),
+// device has too few to trust, the mean of those it has, else a prior the
+// caller set, and no less than its tasks of that kind have been running),
 // finds the time t_b,i at which counter i admits the request, and grants the
 // device with the smallest t_b,i + τ_i. Grants are decided in the order requests arrive, and
 // none is placed on a device before one granted earlier there: a waiting
@@ -21,11 +22,12 @@
 // carries the most tasks c <= k whose batch, of c times the size, ends no
 // later than the request would end on a device that takes one task alone,
 // so that a device that finishes a task first still gets it; where no such
-// device can hold the request, c = k; while the device's model of the task
-// is not calibrated and the task could run alone elsewhere, c = 1. The
-// models learn the batch's time as
-// a function of its size; until a device's model has seen two sizes, a
-// batch is assumed to take as long as its tasks one after another.
+// device can hold the request, c = k; where the task could run alone
+// elsewhere, c = 1 on a device that has not run the task yet and
+// c <= kLearningBatch on one whose grants were all of one size. The models
+// learn the batch's time as a function of its size; until a device's model
+// has seen two sizes, a batch is assumed to take as long as its tasks one
+// after another.
 //
 // Pure and clock-injected: the caller says what time it is, so that tests
 // drive it with a simulated clock and the MPI controller with its own.
@@ -44,8 +46,10 @@ namespace tetiso {
 // model, a size seen kMinSamples times is predicted by the mean of its
 // samples; like its non-linear regression model, any other size, once
 // kMinSamples samples of at least two sizes exist, by a fit of
-// seconds = a * size^b (least squares in log-log space). Before that there
-// is no prediction: the caller falls back to another device's or a default.
+// seconds = a * size^b (least squares in log-log space); with one size only,
+// in proportion to size. Before that there
+// is no prediction: the caller falls back to the mean of the first samples,
+// a prior, another device's prediction or a default.
 class PerformanceModel {
 public:
     static constexpr int kMinSamples = 3;
@@ -53,6 +57,11 @@ public:
     void add(double size, double seconds);
     std::optional<double> predict(double size) const;
     int samples() const { return samples_; }
+    // Seconds per unit of size over every sample (nothing before the first):
+    // what a device's own first tasks say before there are enough to trust.
+    std::optional<double> rate() const {
+        return samples_ > 0 ? std::optional<double>(total_ / total_size_) : std::nullopt;
+    }
     // The different sizes among the samples.
     std::size_t sizes() const { return by_size_.size(); }
 
@@ -63,6 +72,7 @@ private:
     };
     std::map<double, History> by_size_;
     int samples_ = 0;
+    double total_ = 0, total_size_ = 0;
     // Sums for the regression of log(seconds) on log(size).
     double sx_ = 0, sy_ = 0, sxx_ = 0, sxy_ = 0;
 };
@@ -108,6 +118,9 @@ public:
     // tried (an equal guess would lose every tie to the device listed first,
     // and never learn), not so much that it is flooded meanwhile.
     static constexpr double kUncalibratedSpeedup = 2;
+    // The most tasks of a batch on a device whose batches so far were all of
+    // one size (request()).
+    static constexpr int kLearningBatch = 8;
 
     explicit ResourceManager(std::vector<ManagedDevice> devices);
 
@@ -139,6 +152,14 @@ public:
     // The prediction for a kind and size on a device, as request() makes it.
     double predict(int kind, double size, int device) const;
 
+    // What a kind of task is assumed to take on a device before the device
+    // has a sample of its own: seconds_per_size x size (StarPU's calibration
+    // run, made by the caller some other way: NodePlacement scales a probe
+    // of the CPU by the size of the job's domains). A device's own samples
+    // replace it from the first.
+    void set_prior(int kind, int device, double seconds_per_size);
+    bool has_prior(int kind, int device) const { return priors_.count({kind, device}) > 0; }
+
     const PerformanceModel* model(int kind, int device) const;
 
 private:
@@ -159,9 +180,13 @@ private:
     // When device `d` could admit `units` for `seconds`, at `now` or later.
     double admission_time(int device, double units, double seconds, double now) const;
     double units_booked_at(int device, double time, double now) const;
+    // The device's own say on the task: its model once calibrated, else the
+    // mean of its first samples, else its prior; nothing where it has none.
+    std::optional<double> estimate(int kind, double size, int device) const;
 
     std::vector<ManagedDevice> devices_;
     std::map<std::pair<int, int>, PerformanceModel> models_; // (kind, device)
+    std::map<std::pair<int, int>, double> priors_;           // (kind, device) -> seconds per unit of size
     std::map<int, Booking> bookings_;                        // ticket -> booking, open ones
     std::vector<double> last_start_;                         // per device, for FIFO order
     std::vector<double> transfer_seconds_, transfer_size_;    // per device, measured so far

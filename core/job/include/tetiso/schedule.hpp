@@ -161,7 +161,15 @@ struct JobResult {
     std::vector<TaskRecord> tasks;   // in completion order
     int ranks = 1;
     double seconds = 0;
+    // Job::probe_cpu's rate where the job measured it (the CPU's prior under
+    // --device auto), else 0.
+    double cpu_seconds_per_triangle = 0;
 };
+
+// The lattice of Job::probe_cpu: the paper's field on 16^3 nodes, 26,552 raw
+// triangles. Its rate was within 10 % of domain tasks' of 80,000-360,000 raw
+// triangles (three fields) on the same core; on 12^3 nodes it was 35 % low.
+inline constexpr std::int64_t kCpuProbeLattice = 16;
 
 // Called by the controlling process after each task: tasks done, total, and
 // seconds since the start.
@@ -209,6 +217,11 @@ public:
     // take seconds and teach the resource manager that the GPU is slow).
     // Throws tetiso::Error where the device cannot be used.
     void prepare_gpu(int gpu) const;
+
+    // Seconds per raw triangle of a domain task on one core of this process,
+    // from a small reduction of its own (the CPU's prior in the resource
+    // manager: placement.hpp). Takes a few tenths of a second.
+    double probe_cpu() const;
 
 private:
     ReduceOptions reduce_options(const TaskThreads& threads) const {
