@@ -19,8 +19,9 @@ namespace tetiso {
 
 // Merges two pieces covering disjoint sets of domains. Throws tetiso::Error if
 // they share a domain, or if a key appears in both with different positions
-// (the pieces were not extracted consistently).
-Piece merge_by_key(const Piece& a, const Piece& b);
+// (the pieces were not extracted consistently). `threads` (0: all cores)
+// never changes the result.
+Piece merge_by_key(const Piece& a, const Piece& b, int threads = 1);
 
 // Merges any number of pieces, pairwise in a balanced tree, and puts the
 // triangles in canonical order (order_triangles): the result does not depend
@@ -37,8 +38,9 @@ void order_triangles(Piece& piece);
 
 // Clears kLocked on every vertex whose edge lies in no domain outside
 // `piece.domains`: its neighbourhood is complete, so reduction may touch it.
-// Returns the number of vertices unlocked.
-std::size_t unlock_settled(Piece& piece, const EdgeDomains& domains_of_edge);
+// Returns the number of vertices unlocked. With threads > 1 (0: all cores)
+// domains_of_edge is called from that many threads at once.
+std::size_t unlock_settled(Piece& piece, const EdgeDomains& domains_of_edge, int threads = 1);
 
 // What reduces a region: tetiso::reduce when empty, or another function with
 // the same result (a Gpu's reduce).
@@ -65,7 +67,8 @@ struct SeamOptions {
 
 // Drops the samples of every triangle with no vertex within `rings` edges of
 // a locked vertex (all of them when no vertex is locked, or rings < 0).
-void keep_samples_near_locked(Piece& piece, int rings);
+// `threads` (0: all cores) never changes the result.
+void keep_samples_near_locked(Piece& piece, int rings, int threads = 1);
 
 struct SeamReport {
     std::size_t vertices_unlocked = 0;
@@ -88,6 +91,8 @@ struct SeamReport {
 // unchanged), and its result is spliced back by key; its cost is that of the
 // seam's neighbourhood (plus a few linear passes to find it), not the piece's.
 // The result depends only on the two pieces, never on who seams them or when.
+// The linear passes run on options.reduce_options.threads, and so may the
+// calls of domains_of_edge (unlock_settled).
 Piece seam(const Piece& a, const Piece& b, const EdgeDomains& domains_of_edge, const SeamOptions& options = {},
            SeamReport* report = nullptr);
 
