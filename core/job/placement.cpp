@@ -99,7 +99,10 @@ ResourceRequest NodePlacement::request(int task, const Piece* left, const Piece*
     // Domains differ little in size (bisection or METIS balances them):
     // the mean is the task's size, and the models see each kind of task.
     r.size = domain_tets_;
-    if (!cpu_takes(TaskKind::domain)) r.units[0] = 0;
+    if (!cpu_takes(TaskKind::domain)) {
+        r.units[0] = 0;
+        r.alone_elsewhere_later = domains_on_cpu_;
+    }
     const bool fits = task_mib_ <= usable_mib_;
     for (std::size_t d = 1; d < r.units.size(); ++d) r.units[d] = fits ? 1 : 0;
     r.batch.assign(r.units.size(), std::clamp(most_in_batch, 1, batch_limit_));

@@ -181,7 +181,7 @@ Grant ResourceManager::request(const ResourceRequest& request, double now) {
     // at most kLearningBatch, which teaches it how a batch's time grows.
     const PerformanceModel* known = model(request.kind, best.device);
     int most_here = most(static_cast<std::size_t>(best.device));
-    if (std::isfinite(alone_end)) {
+    if (std::isfinite(alone_end) || request.alone_elsewhere_later) {
         if (!known) most_here = 1;
         else if (known->sizes() < 2) most_here = std::min(most_here, kLearningBatch);
     }

@@ -58,6 +58,13 @@ JobResult control(const Job& job, int ranks, const Progress& progress, const std
     // share, on the union of the ranks' bindings. Threads do not change the
     // result. Otherwise the job's last seams, mostly their reduction near the
     // seam, would run on one rank's cores with the others idle.
+    // The seams run here are the job's last, with every other rank idle: on
+    // a node with GPUs their regions are reduced on its first (rank 0 opens
+    // a context there at the first of them), the cores doing the rest.
+    std::optional<int> seam_gpu;
+    if (nodes && job.config().reduce)
+        if (const auto& here = nodes->gpus[static_cast<std::size_t>(nodes->node_of[0])]; !here.empty())
+            seam_gpu = here.front();
     hooks.run_here = [&](int task, const Piece* left, const Piece* right) {
         int threads = job.config().threads;
         cpu_set_t job_cores;
@@ -77,7 +84,7 @@ JobResult control(const Job& job, int ranks, const Progress& progress, const std
                 transport.keep_alive();
                 return 0;
             };
-            piece = job.execute(task, left, right, record, TaskThreads{threads, keep_alive, {}});
+            piece = job.execute(task, left, right, record, TaskThreads{threads, keep_alive, seam_gpu});
         } catch (...) {
             back_home();
             throw;

@@ -69,7 +69,8 @@ fi
 # node's lowest workers drive its GPUs, one each, a worker left for the
 # seams), the lone worker runs them all where there is one. Some task ran on
 # a GPU; under --device gpu every domain task did; with `every`, each GPU that
-# has a driver got tasks.
+# has a driver got tasks. The seams rank 0 runs itself, the root always among
+# them, reduce on a GPU of its node, and no other seam on any.
 drivers() {
     /usr/bin/python3 - "$@" "$gpus" <<'PY' || fail "mpirun -np $3 --device $2: $(cat "$1.why")"
 import json, sys
@@ -78,10 +79,17 @@ every, gpus = sys.argv[4] == "every", int(sys.argv[-1])
 workers = ranks - 1
 driven = min(gpus, workers - 1) if workers >= 2 else 0
 ranks_of = {}
-for t in report["tasks"]:
-    if t["device"] != "cpu":
-        ranks_of.setdefault(int(t["device"].split()[1]), set()).add(t["rank"])
+seams_here = 0
 why = None
+for t in report["tasks"]:
+    if t["kind"] == "seam":
+        if t["device"] != "cpu" and t["rank"] != 0:
+            why = "a seam ran on %s on rank %d" % (t["device"], t["rank"])
+        seams_here += t["device"] != "cpu" and t["rank"] == 0
+    elif t["device"] != "cpu":
+        ranks_of.setdefault(int(t["device"].split()[1]), set()).add(t["rank"])
+if ranks > 1 and seams_here == 0:
+    why = "rank 0 reduced no seam on a GPU"
 if not ranks_of:
     why = "no task ran on a GPU"
 for gpu, on in sorted(ranks_of.items()):
@@ -131,8 +139,11 @@ if [ -n "$mpiexec" ]; then
         mpi 5 8 gpu --gpu 1 && /usr/bin/python3 - "$work/ranks.json" <<'PY' || fail "--gpu 1: $(cat "$work/why")"
 import json, os, sys
 report = json.load(open(sys.argv[1]))
-on = {(t["device"], t["rank"]) for t in report["tasks"] if t["device"] != "cpu"}
+on = {(t["device"], t["rank"]) for t in report["tasks"] if t["device"] != "cpu" and t["kind"] == "domain"}
+seams = {t["device"] for t in report["tasks"] if t["device"] != "cpu" and t["kind"] == "seam"}
 why = "" if on == {("gpu 1", 1)} else "GPU tasks ran as %s, not on gpu 1 by rank 1" % sorted(on)
+if seams - {"gpu 1"}:
+    why = "seams reduced on %s, not on gpu 1" % sorted(seams)
 open(os.path.join(os.path.dirname(sys.argv[1]), "why"), "w").write(why)
 sys.exit(1 if why else 0)
 PY

@@ -240,6 +240,38 @@ TEST(GpuPipeline, SeamRegionsGiveTheCpuPieces) {
     EXPECT_GT(whole.triangle_count(), 0u);
 }
 
+// A seam task given a GPU (rank 0 gives its last seams one) reduces its
+// region there: each is the seam the cores make, byte for byte.
+TEST(GpuPipeline, SeamTasksOnTheGpuGiveTheCpuSeams) {
+    JobConfig config;
+    config.lattice = 48;
+    config.domains = 8;
+    config.field = "gyroid";
+    const Job job(config);
+    std::vector<std::optional<Piece>> pieces(static_cast<std::size_t>(job.task_count()));
+    TaskQueue queue(job);
+    int seams = 0;
+    while (!queue.finished()) {
+        const int t = queue.pop();
+        const TaskNode& n = job.node(t);
+        const Piece* left = n.left >= 0 ? &*pieces[static_cast<std::size_t>(n.left)] : nullptr;
+        const Piece* right = n.right >= 0 ? &*pieces[static_cast<std::size_t>(n.right)] : nullptr;
+        TaskRecord record;
+        Piece cpu = job.execute(t, left, right, record, TaskThreads{2, {}, -1});
+        if (job.kind(t) == TaskKind::seam) {
+            TaskRecord on_gpu;
+            const Piece gpu = job.execute(t, left, right, on_gpu, TaskThreads{2, {}, 0});
+            EXPECT_TRUE(same_piece(cpu, gpu)) << job.describe(t);
+            EXPECT_EQ(on_gpu.stages.gpu, 0);
+            EXPECT_EQ(record.stages.gpu, -1);
+            ++seams;
+        }
+        pieces[static_cast<std::size_t>(t)] = std::move(cpu);
+        queue.complete(t);
+    }
+    EXPECT_EQ(seams, 7);
+}
+
 // The job with its domain tasks on the GPU writes the CPU job's surface.
 TEST(GpuPipeline, JobsOnTheGpuGiveTheCpuSurface) {
     for (const auto& [field, n, domains] : {std::tuple{"paper", 60, 8}, std::tuple{"torus", 44, 27}}) {

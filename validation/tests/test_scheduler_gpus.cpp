@@ -200,6 +200,24 @@ TEST(Scheduler, UnderAutoTheCpuWaitsForItsPriorBeforeItTakesADomain) {
         const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.1));
         EXPECT_TRUE(result.has_value());
         EXPECT_DOUBLE_EQ(result ? result->cpu_seconds_per_triangle : -1, probe);
+        // While the cores wait, each GPU learns: one task, then a batch of
+        // at most kLearningBatch, so that the wait ends soon.
+        std::map<int, std::vector<std::size_t>> grants; // driver -> its grants' sizes, in order
+        for (std::size_t i = 0, b = 0; i < transport.sent.size();) {
+            const FakeTransport::Sent& s = transport.sent[i];
+            const bool batch = b < transport.batches.size() && transport.batches[b].sent_before == i;
+            const std::size_t size = batch ? transport.batches[b++].tasks.size() : 1;
+            if (s.worker <= 2 && job.kind(s.task) == TaskKind::domain) grants[s.worker].push_back(size);
+            i += size;
+        }
+        for (const auto& [driver, sizes] : grants) {
+            if (sizes.size() < 2) {
+                ADD_FAILURE() << "GPU driver " << driver << " had " << sizes.size() << " grants";
+                continue;
+            }
+            EXPECT_EQ(sizes[0], 1u) << "GPU driver " << driver;
+            EXPECT_LE(sizes[1], static_cast<std::size_t>(ResourceManager::kLearningBatch)) << "GPU driver " << driver;
+        }
         return transport.sent;
     };
     const auto domains_on_cpu = [&](const std::vector<FakeTransport::Sent>& sent) {

@@ -97,6 +97,10 @@ struct ResourceRequest {
     // The most tasks like this one a device may take in one grant, in the
     // manager's device order; missing or below 2: one.
     std::vector<int> batch = {};
+    // A device that cannot take the task now will soon take it alone (it
+    // waits for its prior): a device still learning the task takes batches
+    // as small as if it could.
+    bool alone_elsewhere_later = false;
 };
 
 struct Grant {
