@@ -308,13 +308,7 @@ private:
             std::size_t shared = 0;
             for (std::size_t b = 0; b < blocks; ++b) shared += histogram[b * kBuckets + digit(from[0])];
             if (shared == n) continue;
-            std::uint32_t sum = 0;
-            for (std::size_t bucket = 0; bucket < kBuckets; ++bucket)
-                for (std::size_t b = 0; b < blocks; ++b) {
-                    const std::uint32_t here = histogram[b * kBuckets + bucket];
-                    histogram[b * kBuckets + bucket] = sum;
-                    sum += here;
-                }
+            parallel::offsets_by_bucket_then_block(histogram.data(), kBuckets, blocks);
             parallel::for_each(block_threads, split.count, [&](i64 b) {
                 std::uint32_t* c = histogram.data() + static_cast<std::size_t>(b) * kBuckets;
                 for (i64 i = split.begin(b); i < split.begin(b + 1); ++i) to[c[digit(from[i])]++] = from[i];
@@ -362,15 +356,8 @@ private:
             std::size_t shared = 0;
             for (std::size_t b = 0; b < blocks; ++b) shared += histogram[b * kBuckets + digit(key[0])];
             if (shared == n) continue;
-            // Offsets in bucket order and, within a bucket, block order: the
-            // scatter keeps the keys' order among equal digits (stable).
-            u32 sum = 0;
-            for (std::size_t bucket = 0; bucket < kBuckets; ++bucket)
-                for (std::size_t b = 0; b < blocks; ++b) {
-                    const u32 here = histogram[b * kBuckets + bucket];
-                    histogram[b * kBuckets + bucket] = sum;
-                    sum += here;
-                }
+            // The scatter keeps the keys' order among equal digits (stable).
+            parallel::offsets_by_bucket_then_block(histogram, kBuckets, blocks);
             parallel::for_each(blocks_in, static_cast<i64>(blocks), [&](i64 b) {
                 u32* c = histogram + static_cast<std::size_t>(b) * kBuckets;
                 for (std::size_t i = block_begin(static_cast<std::size_t>(b)); i < block_begin(static_cast<std::size_t>(b) + 1); ++i) {

@@ -104,6 +104,22 @@ inline void exclusive_scan(const i32* counts, i64 n, i32* offsets) {
     offsets[n] = static_cast<i32>(sum);
 }
 
+// A stable counting sort's offsets, from counts kept per block,
+// counts[block * buckets + bucket]: each replaced by where that block's share
+// of that bucket starts, the buckets one after another and, within one, the
+// blocks in order. Returns the total.
+template <class T>
+T offsets_by_bucket_then_block(T* counts, std::size_t buckets, std::size_t blocks) {
+    T sum = 0;
+    for (std::size_t bucket = 0; bucket < buckets; ++bucket)
+        for (std::size_t b = 0; b < blocks; ++b) {
+            const T here = counts[b * buckets + bucket];
+            counts[b * buckets + bucket] = sum;
+            sum += here;
+        }
+    return sum;
+}
+
 // The scans and filters below split [0, n) into one contiguous block per
 // thread: each block counts its share, the counts are summed in block order,
 // and each block writes its part from there.

@@ -316,13 +316,7 @@ Rows group_by(int threads, std::size_t rows, const std::vector<std::int32_t>& ro
         for (std::int64_t i = blocks.begin(b); i < blocks.begin(b + 1); ++i)
             ++count[static_cast<std::size_t>(row_of[static_cast<std::size_t>(i)]) / kRowsPerRange];
     }, 0);
-    std::int64_t sum = 0;
-    for (std::size_t range = 0; range < ranges; ++range)
-        for (std::size_t b = 0; b < block_count; ++b) {
-            const std::int64_t count = at[b * ranges + range];
-            at[b * ranges + range] = sum;
-            sum += count;
-        }
+    parallel::offsets_by_bucket_then_block(at.data(), ranges, block_count);
     // Each entry and its row, by range: the sort within a range then reads
     // them in order, not row_of at random.
     Written<std::int32_t> entry(row_of.size()), row(row_of.size());
