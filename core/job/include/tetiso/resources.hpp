@@ -7,7 +7,7 @@
 // whatever units the caller counts (placement.hpp: CPU worker processes, and
 // one task slot per GPU). The manager predicts the task's seconds τ_i on each
 // device from the tasks that finished there (PerformanceModel; while a
-// device has too few to trust, the mean of those it has, else a prior the
+// device has too few to trust, the rate of those it has, else a prior the
 // caller set, and no less than its tasks of that kind have been running),
 // finds the time t_b,i at which counter i admits the request, and grants the
 // device with the smallest t_b,i + τ_i. Grants are decided in the order requests arrive, and
@@ -47,9 +47,9 @@ namespace tetiso {
 // samples; like its non-linear regression model, any other size, once
 // kMinSamples samples of at least two sizes exist, by a fit of
 // seconds = a * size^b (least squares in log-log space); with one size only,
-// in proportion to size. Before that there
-// is no prediction: the caller falls back to the mean of the first samples,
-// a prior, another device's prediction or a default.
+// in proportion to size. Before that there is no prediction: the caller
+// falls back to the rate of the first samples, a prior, another device's
+// prediction or a default.
 class PerformanceModel {
 public:
     static constexpr int kMinSamples = 3;
@@ -185,7 +185,8 @@ private:
     double admission_time(int device, double units, double seconds, double now) const;
     double units_booked_at(int device, double time, double now) const;
     // The device's own say on the task: its model once calibrated, else the
-    // mean of its first samples, else its prior; nothing where it has none.
+    // rate of its first samples times the size, else its prior; nothing
+    // where it has none.
     std::optional<double> estimate(int kind, double size, int device) const;
 
     std::vector<ManagedDevice> devices_;

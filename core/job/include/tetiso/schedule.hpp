@@ -167,8 +167,10 @@ struct JobResult {
 };
 
 // The lattice of Job::probe_cpu: the paper's field on 16^3 nodes, 26,552 raw
-// triangles. Its rate was within 10 % of domain tasks' of 80,000-360,000 raw
-// triangles (three fields) on the same core; on 12^3 nodes it was 35 % low.
+// triangles. Its rate was within 10 % of Job::execute's on the middle domain
+// of three jobs, one thread each (paper N = 500 / 125 domains, gyroid 400 /
+// 64, sphere 300 / 27: 80,000-360,000 raw triangles) on a 2-core Debian 12
+// VM at commit d214b57; on 12^3 nodes it was 35 % low.
 inline constexpr std::int64_t kCpuProbeLattice = 16;
 
 // Called by the controlling process after each task: tasks done, total, and
