@@ -31,6 +31,7 @@ nlohmann::json reduce_json(const ReduceReport& report) {
                           {"collapses", r.collapses},
                           {"flips", r.flips},
                           {"selection_steps", r.selection_steps},
+                          {"selection_passes", r.selection_passes},
                           {"changed_vertices", r.changed_vertices},
                           {"seconds", r.seconds}});
     return {{"triangles_in", report.triangles_in},   {"triangles_out", report.triangles_out},

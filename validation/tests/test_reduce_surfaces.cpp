@@ -324,15 +324,19 @@ TEST_P(ChoosingByReservations, GivesTheSweepsBytes) {
     for (const long window : {1L, 5L, 1000L, 0L, 1L << 30})
         for (const int threads : {1, 2}) {
             o.threads = threads;
-            EXPECT_TRUE(identical(swept, detail::reduce_by_reservations(in, o, window, false)))
+            EXPECT_TRUE(identical(swept, detail::reduce_by_reservations(in, o, window, detail::Speculation::kNone)))
                 << "window " << window << ", " << threads << " threads";
         }
     // Speculation tests every operation of a round first: the window and the
-    // thread count change nothing more.
+    // thread count change nothing more. Placing the samples only for the
+    // operations the steps decide, and running the steps again where a
+    // chosen one fails, must give the same choice too.
     o.threads = 2;
     for (const long window : {5L, 0L, 1L << 30})
-        EXPECT_TRUE(identical(swept, detail::reduce_by_reservations(in, o, window, true)))
-            << "window " << window << ", speculating";
+        for (const auto speculation : {detail::Speculation::kEveryTest, detail::Speculation::kSamplesWhenDecided})
+            EXPECT_TRUE(identical(swept, detail::reduce_by_reservations(in, o, window, speculation)))
+                << "window " << window << ", speculating"
+                << (speculation == detail::Speculation::kSamplesWhenDecided ? ", samples when decided" : "");
 }
 
 INSTANTIATE_TEST_SUITE_P(Surfaces, ChoosingByReservations,

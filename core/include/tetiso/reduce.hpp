@@ -124,6 +124,10 @@ struct ReduceRound {
     // Steps of the choice by reservations, collapses and flips together (0
     // where the host swept in order): what a round waits for on a GPU.
     std::size_t selection_steps = 0;
+    // Times the collapses' steps ran: more than once where a collapse they
+    // chose was then found to move a sample too far (on a GPU, which places
+    // samples only for the collapses the steps decide, in large rounds).
+    std::size_t selection_passes = 0;
     // The surface at the start of the round.
     std::size_t vertices = 0;
     std::size_t triangles = 0;

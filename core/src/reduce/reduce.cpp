@@ -2,6 +2,7 @@
 // round driver (rounds.hpp) over the OpenMP backend, or the CUDA Device's
 // (reduce_gpu.cu) where the options name one.
 #include "tetiso/reduce.hpp"
+#include "tetiso/detail/reduce_policy.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -95,7 +96,7 @@ void check_reduce_options(const ReduceOptions& o) {
 namespace {
 
 Piece reduce_on_host(const Piece& in, const ReduceOptions& options, ReduceReport* report, bool reservations,
-                     long window, bool speculate) {
+                     long window, detail::Speculation speculation) {
     const auto start = std::chrono::steady_clock::now();
     check_reduce_options(options);
     check_reduce_input(in);
@@ -111,7 +112,8 @@ Piece reduce_on_host(const Piece& in, const ReduceOptions& options, ReduceReport
     reduction::ReductionState<HostExec> state;
     state.selection.always_reservations = reservations;
     state.selection.window_override = window;
-    state.selection.speculate = speculate;
+    state.selection.speculate = speculation != detail::Speculation::kNone;
+    if (speculation == detail::Speculation::kSamplesWhenDecided) state.selection.optimistic_min = 0;
     reduction::load_piece(exec, in, options.max_error > 0, state);
     reduction::run_rounds(exec, state, options, available, rep);
     Piece out = reduction::unload_piece(exec, state, options.keep_samples);
@@ -128,7 +130,7 @@ Piece reduce(const Piece& in, const ReduceOptions& options, ReduceReport* report
     if (options.device.is_gpu()) return on_gpu::reduce(options.device.state(), in, options, report, seconds);
     ReduceReport local_report;
     ReduceReport& rep = report ? *report : local_report;
-    Piece out = reduce_on_host(in, options, &rep, false, 0, false);
+    Piece out = reduce_on_host(in, options, &rep, false, 0, detail::Speculation::kNone);
     if (seconds) seconds->reduce += rep.seconds;
     return out;
 }
@@ -187,9 +189,9 @@ std::vector<Piece> reduce_batch(const std::vector<Piece>& pieces, const ReduceOp
 }
 
 namespace detail {
-Piece reduce_by_reservations(const Piece& in, const ReduceOptions& options, long window, bool speculate,
+Piece reduce_by_reservations(const Piece& in, const ReduceOptions& options, long window, Speculation speculation,
                              ReduceReport* report) {
-    return reduce_on_host(in, options, report, true, window, speculate);
+    return reduce_on_host(in, options, report, true, window, speculation);
 }
 } // namespace detail
 

@@ -161,6 +161,7 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
     Surface<Exec>& s = st.s;
     exec.assign(st.changed, s.nv, u8{0});
     exec.assign(st.refused_slots, s.nv, u32{0});
+    st.selection.optimism_spent = false;
     load_obstacles(exec, options.obstacles, st.contact);
     const i32 pieces = st.pieces;
     exec.assign(st.piece_done, pieces, u8{0});
@@ -271,6 +272,7 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         exec.assign(sel.claimed, s.nv, i32{0});
         sel.stamp = 0;
         sel.steps = 0;
+        sel.placement_repeats = 0;
         sel.device_steps = 0;
         const SelectView select_view{fans, edges, st.cones.data(), sel.claimed.data(), 0};
         i32* owner = st.samples.on ? st.samples.owner.data() : nullptr;
@@ -398,6 +400,7 @@ void run_rounds(Exec& exec, ReductionState<Exec>& st, const ReduceOptions& optio
         stats.flips = static_cast<std::size_t>(tally[kTallyFlips]);
         stats.changed_vertices = static_cast<std::size_t>(tally[kTallyChanged]);
         stats.selection_steps = sel.steps;
+        stats.selection_passes = 1 + sel.placement_repeats;
         if (sel.device_steps & 1) stats.selection_steps += static_cast<std::size_t>(tally[kTallyCollapseSteps]);
         if (sel.device_steps & 2) stats.selection_steps += static_cast<std::size_t>(tally[kTallyFlipSteps]);
         lap(seconds.compact);

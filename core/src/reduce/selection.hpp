@@ -94,17 +94,36 @@ void choose_in_order(Selection<Exec>& sel, const SelectView& v, i32 n, u8* chose
 // leaves share a face with it would have blocked it, so the verdict is the
 // dry run's.
 template <bool Flips, class Exec, class Test>
-void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& v, i32 n, i32 nv, u8* chosen,
+void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& view, i32 n, i32 nv, u8* chosen,
                             u8* refused, const Test& test) {
     using Grain = typename Exec::Grain;
     const bool speculate = sel.speculate && !Flips;
+    const i32* order = sel.order.data();
+    u8* outcome = nullptr;
+    // Optimistic placement (PlacementPasses): the samples of a collapse are
+    // placed only once the steps decide it.
+    bool samples = false;
+    if constexpr (!Flips) samples = test.samples_on();
+    PlacementPasses<Exec> placement(sel, n, speculate && samples && n >= sel.optimistic_min && !sel.optimism_spent);
+    if (speculate) {
+        if constexpr (!Flips) dry_run_all(exec, sel, n, test, !placement.optimistic);
+        outcome = sel.outcome.data();
+    }
+    for (int pass = 0;; ++pass) {
+    SelectView v = view;
+    if (pass > 0) {
+        // Only the illegal ones found so far keep their outcome.
+        v.stamp = ++sel.stamp;
+        exec.for_each(n, [=] TETISO_HD(i64 k) {
+            if (outcome[k] != kOutcomeIllegal) outcome[k] = kOutcomeUndecided;
+            chosen[order[k]] = 0;
+        });
+    }
     exec.assign(sel.reservation, nv, kNoReservation);
     u64* reservation = sel.reservation.data();
-    const i32* order = sel.order.data();
     // The ranks that take part, ascending: all, or the legal ones.
     i64 entrants = n;
     const i32* entrant_rank = nullptr;
-    u8* outcome = nullptr;
     i32* claim_rank = nullptr;
     // On the device, with a window of every entrant that the device steps
     // through alone, their number is never needed on the host: they enter,
@@ -112,8 +131,6 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
     // n, the most there can be).
     bool entrants_on_device = false;
     if (speculate) {
-        if constexpr (!Flips) dry_run_all(exec, sel, n, test);
-        outcome = sel.outcome.data();
         const auto legal = [=] TETISO_HD(i64 k) { return outcome[k] == kOutcomeUndecided; };
         if constexpr (!Exec::kHost) entrants_on_device = sel.window_override == 0 && exec.steps_on_device(n);
         if (entrants_on_device) exec.filter_into(n, legal, sel.entrants, kTallyEntrants);
@@ -289,8 +306,13 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
         }
         held = exec.get(sel.held, current);
     }
+    if constexpr (Flips) break;
+    else if (!placement.verify(exec, test, chosen)) break;
+    }
     if constexpr (!Flips) {
         if (!speculate) return;
+        i32* claim_rank = sel.claim_rank.data();
+        const u64* worst = sel.worst_bits.data();
         // What the sweep's tests wrote, as the dry runs found it: the Φ and
         // position of every operation it tested, a refusal for the illegal
         // ones, the bound and the samples' new owners for the chosen ones.
@@ -301,23 +323,27 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
             if (what == kOutcomeIllegal) {
                 // The sweep skips it where an earlier choice claimed one of its ends.
                 i32 vs[4];
-                const int count = v.touched<Flips>(e, v.edges.v0[e], v.edges.v1[e], vs);
+                const int count = view.touched<Flips>(e, view.edges.v0[e], view.edges.v1[e], vs);
                 for (int j = 0; j < count; ++j)
                     if (claim_rank[vs[j]] < rank) return;
                 refused[e] = 1;
             } else if (what != kOutcomeChosen && what != kOutcomeBlockedByCorner) {
                 return; // blocked: never tested
             }
+            if (what == kOutcomeChosen && samples) test.dry.err[e] = static_cast<float>(hd::from_bits(worst[rank]));
             test.adopt(e, what == kOutcomeChosen);
         });
-        if (sel.items > 0 && test.samples_on()) {
-            const i32 *item_rank = sel.item_rank.data(), *item_sample = sel.item_sample.data(),
-                      *item_triangle = sel.item_triangle.data();
-            i32* owner = test.owner;
-            exec.for_each(sel.items, [=] TETISO_HD(i64 item) {
-                if (outcome[item_rank[item]] == kOutcomeChosen) owner[item_sample[item]] = item_triangle[item];
-            });
-        }
+        if (samples)
+            for (int list = 0; list < placement.lists; ++list) {
+                const SampleItems<Exec>* items = &sel.placed_items[static_cast<std::size_t>(list)];
+                if (items->count == 0) continue;
+                const i32 *item_rank = items->rank.data(), *item_sample = items->sample.data(),
+                          *item_triangle = items->triangle.data();
+                i32* owner = test.owner;
+                exec.for_each(items->count, [=] TETISO_HD(i64 item) {
+                    if (outcome[item_rank[item]] == kOutcomeChosen) owner[item_sample[item]] = item_triangle[item];
+                });
+            }
     }
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <limits>
 
@@ -177,6 +178,23 @@ struct FlipTest {
     }
 };
 
+// The most lists of placements a round fills (PlacementPasses, dry_run.hpp),
+// and the operations from which the device places samples optimistically.
+constexpr int kPlacementLists = 4;
+constexpr i32 kOptimisticMin = 1 << 14;
+
+// Samples to place, one item each: per rank its first item, per item its
+// rank, the sample and where it goes (before it is placed: the slot of the
+// face it lies on, -1 for a face the collapse removes); the items their own
+// face does not keep.
+template <class Exec>
+struct SampleItems {
+    template <class T>
+    using Array = typename Exec::template Array<T>;
+    Array<i32> first, rank, sample, triangle, far;
+    i32 count = 0;
+};
+
 template <class Exec>
 struct Selection {
     template <class T>
@@ -193,14 +211,22 @@ struct Selection {
     Array<i32> entrants, claim_rank;
     Array<i32> dry_survivors; // the ranks whose dry run passed its first stage
     Array<i32> by_fan, fan_first, fan_scratch; // the same by the faces of their leaves (dry_run_all)
-    // The samples of the dry runs' leaves, one item each: per rank its
-    // first item and bound, per item its rank, the sample and where it goes
-    // (before it is placed: the slot of the face it lies on, -1 for a face
-    // the collapse removes).
-    Array<i32> sample_count, sample_first, item_rank, item_sample, item_triangle;
-    Array<i32> far_items; // the items their own face does not keep
+    // Per rank: how many samples its leaves hold (where they are to be
+    // placed), the largest of their bounds, and whether they were placed.
+    Array<i32> sample_count;
     Array<u64> worst_bits;
-    i32 items = 0;
+    Array<u8> placed;
+    // The placements of a round, one list per pass that placed samples
+    // (PlacementPasses); each rank's in one list at most.
+    std::array<SampleItems<Exec>, kPlacementLists> placed_items;
+    // Optimistic placement from this many operations up (PlacementPasses;
+    // the host's tests set 0 to exercise it), and how many times a round's
+    // steps ran again since the counter was reset.
+    i32 optimistic_min = Exec::kHost ? std::numeric_limits<i32>::max() : kOptimisticMin;
+    std::size_t placement_repeats = 0;
+    // Set once a round ran out of optimistic passes: the rounds after it,
+    // whose collapses fail the error test ever more often, place eagerly.
+    bool optimism_spent = false;
     bool speculate = !Exec::kHost;
     i32 stamp = 0;
     // Tests only: the reservations on one host thread too, with this window
@@ -222,6 +248,8 @@ struct Selection {
 // together, before the edges are written). kTallyOffered: the edges offered
 // a flip. kTallyVertices, kTallyTriangles: the surface's after compaction.
 // kTallyEntrants: the collapses found legal by the dry runs.
+// kTallyRefusedChoices: chosen collapses whose samples, placed after the
+// steps, found no face (PlacementPasses).
 enum TallySlot : int {
     kTallyEvaluated,
     kTallyCollapses,
@@ -237,7 +265,8 @@ enum TallySlot : int {
     kTallyFlipSteps,
     kTallyVertices,
     kTallyTriangles,
-    kTallyEntrants
+    kTallyEntrants,
+    kTallyRefusedChoices
 };
 
 } // namespace tetiso::reduction

@@ -1,9 +1,9 @@
 // For tests: the host reduction made to choose as the GPU does (by
 // deterministic reservations in every round, the flips too, on any thread
-// count), with a window of `window` operations (0: the host's), and with
-// speculate, every collapse tested before the steps as the GPU does. Its
-// output must be reduce()'s, byte for byte: the choice does not depend on how
-// it is made, and this checks that where there is no GPU.
+// count), with a window of `window` operations (0: the host's), and tested
+// as `speculation` says. Its output must be reduce()'s, byte for byte: the
+// choice does not depend on how it is made, and this checks that where there
+// is no GPU.
 #pragma once
 
 #include "tetiso/mesh.hpp"
@@ -11,7 +11,13 @@
 
 namespace tetiso::detail {
 
-Piece reduce_by_reservations(const Piece& in, const ReduceOptions& options, long window, bool speculate,
+// When the collapses are tested: each when the steps reach it (the host's
+// way), or every one before the steps (speculation, the GPU's way), either
+// with every test or with the samples placed only for those the steps decide
+// (the GPU's in large rounds).
+enum class Speculation { kNone, kEveryTest, kSamplesWhenDecided };
+
+Piece reduce_by_reservations(const Piece& in, const ReduceOptions& options, long window, Speculation speculation,
                              ReduceReport* report = nullptr);
 
 } // namespace tetiso::detail
