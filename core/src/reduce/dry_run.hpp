@@ -151,10 +151,11 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test, bool
 // choose among collapses whose tests, all of them, have passed by the end,
 // and every collapse the sweep would test has been placed. After
 // kPlacementLists - 1 passes that found a chosen collapse illegal, every
-// legal collapse not yet placed is, the steps run a last time, and the
-// reduction's later rounds place eagerly (late rounds, near the bound,
-// fail the error test more and more often: up to half of the collapses that
-// passed the others in the last rounds of that surface).
+// legal collapse not yet placed is, and the steps run a last time. A round
+// that needs a third pass makes the reduction's later rounds place eagerly:
+// late rounds, near the bound, fail the error test more and more often (up
+// to half of the collapses that passed the others in the last rounds of
+// that surface), and on the GPU a pass costs about a millisecond.
 
 template <class Exec>
 struct PlacementPasses {
@@ -199,6 +200,8 @@ struct PlacementPasses {
         // The device's steps of this pass, which the next overwrites.
         if (sel.device_steps & 1) sel.steps += static_cast<std::size_t>(tally[kTallyCollapseSteps]);
         ++sel.placement_repeats;
+        // A third pass costs about what placing eagerly would have.
+        if (lists >= 2) sel.optimism_spent = true;
         return true;
     }
 };

@@ -224,8 +224,8 @@ struct Selection {
     // steps ran again since the counter was reset.
     i32 optimistic_min = Exec::kHost ? std::numeric_limits<i32>::max() : kOptimisticMin;
     std::size_t placement_repeats = 0;
-    // Set once a round ran out of optimistic passes: the rounds after it,
-    // whose collapses fail the error test ever more often, place eagerly.
+    // Set once a round needed a third pass: the rounds after it, whose
+    // collapses fail the error test ever more often, place eagerly.
     bool optimism_spent = false;
     bool speculate = !Exec::kHost;
     i32 stamp = 0;
