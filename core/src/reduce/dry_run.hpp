@@ -3,8 +3,6 @@
 // the round reads.
 #pragma once
 
-#include <cstdio>
-
 #include "../hd.hpp"
 #include "selection_state.hpp"
 
@@ -89,7 +87,7 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test, bool
     if (samples) {
         sel.worst_bits.resize(static_cast<std::size_t>(n));
         sel.sample_count.resize(static_cast<std::size_t>(n));
-        sel.placed.resize(static_cast<std::size_t>(n));
+        if (!place_samples) sel.placed.resize(static_cast<std::size_t>(n));
     }
     u64* worst = sel.worst_bits.data();
     i32* count = sel.sample_count.data();
@@ -103,7 +101,7 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test, bool
         if (!samples) return;
         worst[k] = hd::bits(0.0);
         count[k] = 0;
-        placed[k] = 0;
+        if (!place_samples) placed[k] = 0; // PlacementPasses' record
     });
     exec.filter_into(n, [=] TETISO_HD(i64 k) { return outcome[k] == kOutcomeUndecided; }, sel.dry_survivors,
                      kTallyDrySurvivors);
@@ -130,19 +128,17 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test, bool
         outcome[k] = legal ? kOutcomeUndecided : kOutcomeIllegal;
         if (!samples) return;
         worst[k] = hd::bits(deferred);
-        if (!place_samples || !legal) return;
-        count[k] = test.leaf_samples(e);
-        placed[k] = 1;
+        if (place_samples && legal) count[k] = test.leaf_samples(e);
     }, Grain::kTests);
     if (samples && place_samples) place_listed_samples(exec, sel, sel.placed_items[0], n, test);
 }
 
 // Optimistic placement. Of a collapse's dry-run tests, placing its leaves'
 // samples (the error bound) costs the most, yet seldom is the one that
-// fails: on the paper surface at N = 60 (reduce_by_reservations), fewer than
+// fails: on the paper surface at N = 60 (reduce_by_reservations), at most
 // one collapse in a thousand that passed every other test failed it in the
-// first seven rounds, which hold most of the work. And the steps choose about
-// one legal collapse in eight. So the steps may first take every collapse
+// first eight rounds, which place 60 % of the samples. And the steps choose
+// one legal collapse in ten or fewer. So the steps may first take every collapse
 // that passed the other tests as legal, and the samples be placed only for
 // those they decide (chosen, or blocked by a corner, whose verdict the
 // sweep needs too); if some chosen one then fails, the steps run again
@@ -156,7 +152,6 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test, bool
 // late rounds, near the bound, fail the error test more and more often (up
 // to half of the collapses that passed the others in the last rounds of
 // that surface), and on the GPU a pass costs about a millisecond.
-
 template <class Exec>
 struct PlacementPasses {
     Selection<Exec>& sel;

@@ -62,63 +62,16 @@ void choose_in_order(Selection<Exec>& sel, const SelectView& v, i32 n, u8* chose
     }
 }
 
-// The same sequential greedy choice by deterministic reservations:
-// operations enter a window in priority order; in each step every window
-// operation not yet blocked by a chosen one reserves its footprint with its
-// rank (an atomic minimum), and one that finds no earlier rank anywhere
-// within path length 1 of its footprint has no undecided earlier operation in
-// conflict with it. Its turn in the sequential order has come: it is tested,
-// and chosen if legal, exactly as the sweep would; those decided in one step
-// are pairwise clear of each other. The others wait for the next step. Each
-// operation is tested at most once, the tests run in parallel, and the set
-// is the sweep's for any thread count, window width and backend.
-//
-// A reservation is stamped with its step (the step in the high word, counted
-// down, so that a reservation of this step is below every older one): the
-// reservations never need clearing, and a step is two parallel loops, one to
-// reserve and one to decide and claim, with no pass of the host between
-// them.
-//
-// Speculation (sel.speculate, the device's choice): every operation is
-// tested first, all at once, on the round's state and writing nothing the
-// round reads (test.dry_run). An operation found illegal then never enters
-// the window: it could block no one, so no one waits for it, and the chains
-// of waiting, which the steps follow one link a step, are those of the legal
-// operations alone (late rounds, where most candidates are illegal, take
-// several times fewer steps). What the sweep does with each operation
-// is then settled after the steps, from the ranks that claimed each vertex:
-// an illegal one whose ends no earlier choice claimed is refused (and its Φ
-// written, as the sweep's test writes it), and the chosen ones are tested
-// for real last, moving their samples; an operation that the sweep tests
-// finds its leaves as the round left them, since a chosen operation whose
-// leaves share a face with it would have blocked it, so the verdict is the
-// dry run's.
+// One run of the reservation steps over the round's operations (all, or
+// with speculation those not found illegal), as choose_by_reservations
+// describes: chosen[e] for those chosen and, with speculation, each rank's
+// outcome and the lowest rank that claimed each vertex (sel.claim_rank).
 template <bool Flips, class Exec, class Test>
-void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& view, i32 n, i32 nv, u8* chosen,
-                            u8* refused, const Test& test) {
+void run_reservation_steps(Exec& exec, Selection<Exec>& sel, const SelectView& v, i32 n, i32 nv, u8* chosen,
+                           u8* refused, const Test& test, bool speculate) {
     using Grain = typename Exec::Grain;
-    const bool speculate = sel.speculate && !Flips;
     const i32* order = sel.order.data();
-    u8* outcome = nullptr;
-    // Optimistic placement (PlacementPasses): the samples of a collapse are
-    // placed only once the steps decide it.
-    bool samples = false;
-    if constexpr (!Flips) samples = test.samples_on();
-    PlacementPasses<Exec> placement(sel, n, speculate && samples && n >= sel.optimistic_min && !sel.optimism_spent);
-    if (speculate) {
-        if constexpr (!Flips) dry_run_all(exec, sel, n, test, !placement.optimistic);
-        outcome = sel.outcome.data();
-    }
-    for (int pass = 0;; ++pass) {
-    SelectView v = view;
-    if (pass > 0) {
-        // Only the illegal ones found so far keep their outcome.
-        v.stamp = ++sel.stamp;
-        exec.for_each(n, [=] TETISO_HD(i64 k) {
-            if (outcome[k] != kOutcomeIllegal) outcome[k] = kOutcomeUndecided;
-            chosen[order[k]] = 0;
-        });
-    }
+    u8* outcome = speculate ? sel.outcome.data() : nullptr;
     exec.assign(sel.reservation, nv, kNoReservation);
     u64* reservation = sel.reservation.data();
     // The ranks that take part, ascending: all, or the legal ones.
@@ -306,8 +259,67 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
         }
         held = exec.get(sel.held, current);
     }
-    if constexpr (Flips) break;
-    else if (!placement.verify(exec, test, chosen)) break;
+}
+
+// The same sequential greedy choice by deterministic reservations:
+// operations enter a window in priority order; in each step every window
+// operation not yet blocked by a chosen one reserves its footprint with its
+// rank (an atomic minimum), and one that finds no earlier rank anywhere
+// within path length 1 of its footprint has no undecided earlier operation in
+// conflict with it. Its turn in the sequential order has come: it is tested,
+// and chosen if legal, exactly as the sweep would; those decided in one step
+// are pairwise clear of each other. The others wait for the next step. Each
+// operation is tested at most once, the tests run in parallel, and the set
+// is the sweep's for any thread count, window width and backend.
+//
+// A reservation is stamped with its step (the step in the high word, counted
+// down, so that a reservation of this step is below every older one): the
+// reservations never need clearing, and a step is two parallel loops, one to
+// reserve and one to decide and claim, with no pass of the host between
+// them.
+//
+// Speculation (sel.speculate, the device's choice): every operation is
+// tested first, all at once, on the round's state and writing nothing the
+// round reads (test.dry_run). An operation found illegal then never enters
+// the window: it could block no one, so no one waits for it, and the chains
+// of waiting, which the steps follow one link a step, are those of the legal
+// operations alone (late rounds, where most candidates are illegal, take
+// several times fewer steps). What the sweep does with each operation
+// is then settled after the steps, from the ranks that claimed each vertex:
+// an illegal one whose ends no earlier choice claimed is refused (and its Φ
+// written, as the sweep's test writes it), and the chosen ones are tested
+// for real last, moving their samples; an operation that the sweep tests
+// finds its leaves as the round left them, since a chosen operation whose
+// leaves share a face with it would have blocked it, so the verdict is the
+// dry run's.
+template <bool Flips, class Exec, class Test>
+void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& view, i32 n, i32 nv, u8* chosen,
+                            u8* refused, const Test& test) {
+    const bool speculate = sel.speculate && !Flips;
+    const i32* order = sel.order.data();
+    u8* outcome = nullptr;
+    // Optimistic placement (PlacementPasses): the samples of a collapse are
+    // placed only once the steps decide it.
+    bool samples = false;
+    if constexpr (!Flips) samples = test.samples_on();
+    PlacementPasses<Exec> placement(sel, n, speculate && samples && n >= sel.optimistic_min && !sel.optimism_spent);
+    if (speculate) {
+        if constexpr (!Flips) dry_run_all(exec, sel, n, test, !placement.optimistic);
+        outcome = sel.outcome.data();
+    }
+    for (int pass = 0;; ++pass) {
+        SelectView v = view;
+        if (pass > 0) {
+            // Only the illegal ones found so far keep their outcome.
+            v.stamp = ++sel.stamp;
+            exec.for_each(n, [=] TETISO_HD(i64 k) {
+                if (outcome[k] != kOutcomeIllegal) outcome[k] = kOutcomeUndecided;
+                chosen[order[k]] = 0;
+            });
+        }
+        run_reservation_steps<Flips>(exec, sel, v, n, nv, chosen, refused, test, speculate);
+        if constexpr (Flips) break;
+        else if (!placement.verify(exec, test, chosen)) break;
     }
     if constexpr (!Flips) {
         if (!speculate) return;
