@@ -127,6 +127,46 @@ public:
         cuda::check_launch("for_each_of");
     }
 
+    // The tile that runs one task of for_each_of_tiled (tile.hpp): a
+    // legality test's loops over the new faces of a collapse (a dozen early
+    // on) and over their corners (twice that) spread over the tile, the
+    // faces shared in shared memory rather than kept in each thread's local
+    // memory. Sixteen: a warp of 32 per collapse left more threads idle than
+    // it saved (batches of 32 domains on an H200: 3.9 against 4.9 M raw
+    // triangles/s). TETISO_TEST_TILE sets it at build time, for measuring.
+#ifdef TETISO_TEST_TILE
+    static constexpr int kTileSize = TETISO_TEST_TILE;
+#else
+    static constexpr int kTileSize = 16;
+#endif
+    using Tile = cuda_exec::DeviceTile<kTileSize>;
+    // Eight tiles a block, each with its scratch. The tests' kernel held to
+    // the registers of five blocks a multiprocessor (96): uncapped (160,
+    // three blocks), its warps waited on the caches with no other warp to
+    // run; it spills a little at 96, and gains from more warps more than
+    // that costs; at six blocks (85) it spills more than it gains (batches of 32
+    // domains on an H200: 5.1-5.2, 5.0-5.1 and 4.9-5.0 M raw triangles/s).
+    // TETISO_TEST_TILE_BLOCKS sets it at build time, for measuring.
+    static constexpr int kTilesPerBlock = 8;
+#ifdef TETISO_TEST_TILE_BLOCKS
+    static constexpr int kTileBlocksPerProcessor = TETISO_TEST_TILE_BLOCKS;
+#else
+    static constexpr int kTileBlocksPerProcessor = 5;
+#endif
+
+    // function(i, tile, scratch) for i < *n (at most max_n), each i a task
+    // of a tile of kTileSize threads sharing `scratch` in shared memory.
+    template <class Scratch, class Function>
+    void for_each_of_tiled(const i64* n, i64 max_n, const Function& function, const char* file = __builtin_FILE(),
+                           int line = __builtin_LINE()) const {
+        const Timed timed(*this, "for_each_of_tiled", file, line);
+        if (max_n <= 0) return;
+        const i64 blocks = std::min<i64>((max_n + kTilesPerBlock - 1) / kTilesPerBlock, i64{processors_} * 8);
+        cuda_exec::for_each_of_tiled_kernel<kTileSize, kTileSize * kTilesPerBlock, kTileBlocksPerProcessor, Scratch>
+            <<<static_cast<unsigned>(blocks), kTileSize * kTilesPerBlock, 0, stream_>>>(n, function);
+        cuda::check_launch("for_each_of_tiled");
+    }
+
     // Steps of a device-side loop between two reads of its state by the host:
     // a read waits for the device, a step past the loop's end costs a few
     // empty launches.

@@ -49,6 +49,68 @@ __global__ void __launch_bounds__(cuda::kBlock, 3)
         function(i);
 }
 
+// A tile of a warp's threads that runs one task together (tile.hpp): what
+// CudaExec::for_each_of_tiled hands its function. Its members are the host's
+// too, for the host's compilation of code that names it, and run only on
+// the device.
+template <int Size>
+struct DeviceTile {
+    static constexpr int kSize = Size;
+    __host__ __device__ static constexpr int size() { return Size; }
+#ifdef __CUDA_ARCH__
+    __device__ int rank() const { return static_cast<int>(threadIdx.x % Size); }
+    __device__ unsigned ballot(bool b) const {
+        return cooperative_groups::tiled_partition<Size>(cooperative_groups::this_thread_block()).ballot(b);
+    }
+    __device__ int sum(int x) const {
+        const auto tile = cooperative_groups::tiled_partition<Size>(cooperative_groups::this_thread_block());
+        for (int offset = Size / 2; offset > 0; offset /= 2) x += tile.shfl_xor(x, offset);
+        return x;
+    }
+    template <class T>
+    __device__ T shfl(const T& value, int rank) const {
+        return cooperative_groups::tiled_partition<Size>(cooperative_groups::this_thread_block()).shfl(value, rank);
+    }
+    __device__ static int lowest(unsigned mask) { return __ffs(mask) - 1; }
+    __device__ static int count(unsigned mask) { return __popc(mask); }
+    __device__ void sync() const {
+        cooperative_groups::tiled_partition<Size>(cooperative_groups::this_thread_block()).sync();
+    }
+#else
+    int rank() const { return 0; }
+    unsigned ballot(bool b) const { return b; }
+    int sum(int x) const { return x; }
+    template <class T>
+    T shfl(const T& value, int) const {
+        return value;
+    }
+    static int lowest(unsigned) { return 0; }
+    static int count(unsigned mask) { return mask ? 1 : 0; }
+    void sync() const {}
+#endif
+};
+
+// CudaExec::for_each_of_tiled's loop: tiles of Size threads striding over
+// the tasks, each tile's scratch in shared memory (raw bytes: a __shared__
+// variable is not constructed).
+template <int Size, int Block, int MinBlocks, class Scratch, class Function>
+__global__ void __launch_bounds__(Block, MinBlocks) for_each_of_tiled_kernel(const std::int64_t* n, Function function) {
+    constexpr int kTiles = Block / Size;
+    struct alignas(Scratch) Raw {
+        unsigned char bytes[sizeof(Scratch)];
+    };
+    __shared__ Raw scratch[kTiles];
+    const DeviceTile<Size> tile;
+    const int own = static_cast<int>(threadIdx.x / Size);
+    Scratch& mine = *reinterpret_cast<Scratch*>(&scratch[own]);
+    const std::int64_t count = *n;
+    for (std::int64_t i = blockIdx.x * static_cast<std::int64_t>(kTiles) + own; i < count;
+         i += static_cast<std::int64_t>(gridDim.x) * kTiles) {
+        function(i, tile, mine);
+        tile.sync(); // the next task overwrites the scratch
+    }
+}
+
 // A device-side loop of steps, each two passes over a list whose size the
 // previous step left in device memory (CudaExec::run_steps): one cooperative
 // grid, every block resident, a grid-wide barrier between the passes and

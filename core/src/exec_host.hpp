@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "parallel.hpp"
+#include "tile.hpp"
 
 namespace tetiso {
 
@@ -65,6 +66,20 @@ struct HostExec {
     void for_each_of(const i64* n, i64 /*max_n*/, const Function& function, Grain grain = Grain::kCheap,
                      i64 min_n = 0) const {
         parallel::for_each(threads, std::max(*n, min_n), grain, function);
+    }
+
+    // The tile that runs one task of for_each_of_tiled (tile.hpp).
+    using Tile = SequentialTile;
+
+    // function(i, tile, scratch) for i < *n (at most max_n), each i a task
+    // of a tile of threads sharing `scratch`: here each a thread's, its
+    // scratch on its stack.
+    template <class Scratch, class Function>
+    void for_each_of_tiled(const i64* n, i64 /*max_n*/, const Function& function) const {
+        parallel::for_each(threads, *n, Grain::kTests, [&](i64 i) {
+            Scratch scratch;
+            function(i, Tile{}, scratch);
+        });
     }
 
     // Steps of a device-side loop run between two reads of its state by the

@@ -28,6 +28,7 @@
 #include <gtest/gtest.h>
 
 #include "hd.hpp"
+#include "tile.hpp"
 
 #ifdef TETISO_TEST_GPU
 #include "exec_cuda.cuh"
@@ -339,6 +340,102 @@ void check_order_by_key(Exec& exec, i64 n, u64 below, u64 seed) {
     EXPECT_EQ(downloaded(exec, device_keys, n), keys);
 }
 
+// --- for_each_of_tiled and tile.hpp's loops
+
+// A task's scratch: where each member of its loop was enumerated.
+struct TileScratch {
+    static constexpr int kMax = 80;
+    i32 index_at[kMax];
+};
+
+// What one task's loops found: each against a plain loop over the task's
+// indices. member(i) and value(i) are functions of (task, i); the ordered
+// fold is not commutative, so it holds only in order.
+struct TileResult {
+    i32 any, first, sum, members, stopped, in_order;
+    u64 fold;
+    bool operator==(const TileResult& o) const {
+        return any == o.any && first == o.first && sum == o.sum && members == o.members && stopped == o.stopped &&
+               in_order == o.in_order && fold == o.fold;
+    }
+};
+
+TETISO_HD inline u32 tile_hash(i64 task, int i) {
+    u64 h = static_cast<u64>(task) * 0x9E3779B97F4A7C15ull + static_cast<u64>(i) * 0xC2B2AE3D27D4EB4Full;
+    h ^= h >> 29;
+    h *= 0xBF58476D1CE4E5B9ull;
+    return static_cast<u32>(h >> 32);
+}
+
+template <class Tile>
+TETISO_HD TileResult run_tile_loops(const Tile& tile, i64 task, TileScratch& scratch) {
+    const int n = static_cast<int>(tile_hash(task, -1) % TileScratch::kMax); // 0..79: up to 5 passes of 16
+    const u32 keep = tile_hash(task, -2) % 4;                                  // none, some, most, all
+    const auto member = [&](int i) { return keep == 3 || (keep > 0 && tile_hash(task, i) % 4 < keep); };
+    const auto value = [&](int i) { return static_cast<int>(tile_hash(task, i) % 1000); };
+    TileResult r{};
+    r.any = tile_any(tile, n, member);
+    r.first = tile_first(tile, n, member);
+    r.sum = tile_sum(tile, n, value);
+    bool stopped = false;
+    // Stops at a member whose value is below 5: half the tasks have none.
+    const u32 stop_below = task % 2 ? 5 : 0;
+    const int members = tile_enumerate(tile, n, member, [&](int i, int place) {
+        scratch.index_at[place] = i;
+        return value(i) < static_cast<int>(stop_below);
+    }, &stopped);
+    tile.sync();
+    r.stopped = stopped;
+    r.members = stopped ? -1 : members; // where it stopped, the count is the tile's passes'
+    r.in_order = 1;
+    if (!stopped)
+        for (int i = 0, place = 0; i < n; ++i)
+            if (member(i) && scratch.index_at[place++] != i) r.in_order = 0;
+    u64 fold = 7;
+    tile_fold(tile, n, member, [&](int i) { return static_cast<u64>(value(i)); },
+              [&](u64 v) { fold = fold * 1000003u + v; });
+    r.fold = fold;
+    return r;
+}
+
+template <class Exec>
+void check_tiled(Exec& exec, i64 tasks) {
+    ArrayOf<Exec, i64> count;
+    exec.upload(std::vector<i64>{tasks}, count);
+    ArrayOf<Exec, TileResult> out;
+    exec.assign(out, std::max<i64>(tasks, 1), TileResult{});
+    TileResult* o = out.data();
+    using Tile = typename Exec::Tile;
+    exec.template for_each_of_tiled<TileScratch>(count.data(), tasks, [=] TETISO_HD(i64 task, const Tile& tile,
+                                                                                     TileScratch& scratch) {
+        const TileResult r = run_tile_loops(tile, task, scratch);
+        if (tile.rank() == 0) o[task] = r;
+    });
+    const std::vector<TileResult> got = downloaded(exec, out, tasks);
+    for (i64 task = 0; task < tasks; ++task) {
+        // Plain loops.
+        const int n = static_cast<int>(tile_hash(task, -1) % TileScratch::kMax);
+        const u32 keep = tile_hash(task, -2) % 4;
+        const auto member = [&](int i) { return keep == 3 || (keep > 0 && tile_hash(task, i) % 4 < keep); };
+        const auto value = [&](int i) { return static_cast<int>(tile_hash(task, i) % 1000); };
+        TileResult expected{0, n, 0, 0, 0, 1, 7};
+        for (int i = 0; i < n; ++i) {
+            expected.sum += value(i);
+            if (!member(i)) continue;
+            expected.any = 1;
+            expected.first = std::min(expected.first, i);
+            ++expected.members;
+            if (task % 2 && value(i) < 5) expected.stopped = 1;
+            expected.fold = expected.fold * 1000003u + static_cast<u64>(value(i));
+        }
+        if (expected.stopped) expected.members = -1;
+        const TileResult& r = got[static_cast<std::size_t>(task)];
+        EXPECT_EQ(r.stopped, expected.stopped) << "task " << task;
+        ASSERT_TRUE(r == expected) << "task " << task << ": any " << r.any << " first " << r.first << " sum " << r.sum
+                                   << " members " << r.members << " in order " << r.in_order;
+    }
+}
+
 // --- the backends
 
 #ifdef TETISO_TEST_GPU
@@ -504,6 +601,10 @@ TYPED_TEST(ExecConformance, RunStepsToTheEndOnTheDevice) {
 
 // The members whose values are each backend's own (the steps, the window,
 // the times) promise only what a driver relies on.
+TYPED_TEST(ExecConformance, TiledLoopsGiveTheSequentialLoopsResults) {
+    at_every_size([&](i64 n) { check_tiled(this->exec(), n); });
+}
+
 TYPED_TEST(ExecConformance, MarksStepsWindowAndSync) {
     using Exec = typename TypeParam::Exec;
     auto& exec = this->exec();

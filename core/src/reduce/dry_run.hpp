@@ -79,7 +79,6 @@ void place_listed_samples(Exec& exec, Selection<Exec>& sel, SampleItems<Exec>& i
 // collapse undecided here may still be refused by them.
 template <class Exec, class Test>
 void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test, bool place_samples) {
-    using Grain = typename Exec::Grain;
     const i32* order = sel.order.data();
     sel.outcome.resize(static_cast<std::size_t>(n));
     u8* outcome = sel.outcome.data();
@@ -107,8 +106,8 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test, bool
                      kTallyDrySurvivors);
     const i32* survivors = sel.dry_survivors.data();
     // On the device, the survivors grouped by the faces of their leaves (the
-    // rest after them), so that a warp's threads loop over as many faces:
-    // the geometric tests' loops run over the fan. (The host's grouping
+    // rest after them), so that a warp's tiles loop over as many faces: the
+    // geometric tests' loops run over the fan. (The host's grouping
     // sorts each group's run, made for short runs: these are long, and a
     // host thread gains nothing from the order.)
     const i32* by_fan = survivors;
@@ -118,18 +117,23 @@ void dry_run_all(Exec& exec, Selection<Exec>& sel, i32 n, const Test& test, bool
         }, sel.fan_first, sel.by_fan, sel.fan_scratch);
         by_fan = sel.by_fan.data();
     }
-    exec.for_each_of(exec.tally_at(kTallyDrySurvivors), n, [=] TETISO_HD(i64 j) {
+    // A tile of threads a collapse (on the GPU, part of a warp), its new
+    // faces in memory the tile shares.
+    using Tile = typename Exec::Tile;
+    exec.template for_each_of_tiled<NewFan>(exec.tally_at(kTallyDrySurvivors), n,
+                                            [=] TETISO_HD(i64 j, const Tile& tile, NewFan& fan) {
         const i32 k = by_fan[j], e = order[k];
         // Always a place for the bound (the test reads it only with
         // samples): the compiler then leaves out the test's path that places
         // the samples itself, with its registers and stack.
         double deferred = 0.0;
-        const bool legal = test.dry_run_rest(e, &deferred) == Verdict::kLegal;
+        const bool legal = test.dry_run_rest(tile, e, fan, &deferred) == Verdict::kLegal;
+        if (tile.rank() != 0) return;
         outcome[k] = legal ? kOutcomeUndecided : kOutcomeIllegal;
         if (!samples) return;
         worst[k] = hd::bits(deferred);
         if (place_samples && legal) count[k] = test.leaf_samples(e);
-    }, Grain::kTests);
+    });
     if (samples && place_samples) place_listed_samples(exec, sel, sel.placed_items[0], n, test);
 }
 

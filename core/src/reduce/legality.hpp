@@ -36,6 +36,7 @@
 #include <utility>
 
 #include "../hd.hpp"
+#include "../tile.hpp"
 #include "criterion.hpp"
 #include "error_bound.hpp"
 #include "round_view.hpp"
@@ -227,30 +228,31 @@ TETISO_HD inline Corners old_face(const RoundView& m, const NewFan& fan, int f) 
 // the border): the half-open angles [a, b) of the faces must hold it once. A
 // closed fan turning k times holds every ray k times; an open one turning
 // more than once holds its first side twice.
-TETISO_HD inline bool fan_at_p_embedded(const NewFan& fan) {
+template <class Tile>
+TETISO_HD bool fan_at_p_embedded(const Tile& tile, const NewFan& fan) {
     Vec m{0, 0, 0};
     for (int f = 0; f < fan.count; ++f) m = m + fan.n[f];
     const double len = norm(m);
     if (!(len > 0)) return false;
     m = (1.0 / len) * m;
-    for (int f = 0; f < fan.count; ++f)
-        if (!(dot(fan.n[f], m) > kConeMargin)) return false;
-    int first = 0; // on the border: the face whose first side no face ends on
-    bool open = false;
-    for (int f = 0; f < fan.count && !open; ++f) {
-        bool follows = false;
-        for (int g = 0; g < fan.count && !follows; ++g) follows = fan.ib[g] == fan.ia[f];
-        if (!follows) first = f, open = true;
-    }
+    if (tile_any(tile, fan.count, [&](int f) { return !(dot(fan.n[f], m) > kConeMargin); })) return false;
+    // On the border: the face whose first side no face ends on.
+    int first = tile_first(tile, fan.count, [&](int f) {
+        for (int g = 0; g < fan.count; ++g)
+            if (fan.ib[g] == fan.ia[f]) return false;
+        return true;
+    });
+    const bool open = first < fan.count;
+    if (!open) first = 0;
     Vec ray = fan.a(first) - fan.p;
     ray = ray - dot(ray, m) * m;
     const Vec across = cross(m, ray);
     // Each side is measured the same way in both faces that hold it, so that
     // rounding cannot count the first side twice or not at all; on the
     // border, the first side is the first face's own.
-    int holding = 0;
-    for (int f = 0; f < fan.count; ++f)
-        holding += holds_ray(fan.a(f) - fan.p, fan.b(f) - fan.p, ray, across, open && f == first);
+    const int holding = tile_sum(tile, fan.count, [&](int f) {
+        return holds_ray(fan.a(f) - fan.p, fan.b(f) - fan.p, ray, across, open && f == first) ? 1 : 0;
+    });
     return holding == 1;
 }
 
@@ -300,15 +302,16 @@ TETISO_HD inline bool ring_clear(const RoundView& m, i32 u, i32 w, const NewFan&
 // extraction leaves faces that touch along a line where the surface passes
 // through a mesh node, and cleaning those up must stay possible. Faces that
 // share no corner are not tested.
-TETISO_HD inline bool clear_of_neighbours(const RoundView& m, i32 u, i32 w, bool border_edge, const NewFan& fan) {
-    if (!fan_at_p_embedded(fan))
-        for (int f = 0; f < fan.count; ++f) {
-            if (norm2(fan.n[f]) == 0) continue;
-            for (int g = f + 1; g < fan.count; ++g)
-                if (!apart(fan.p, fan.n[f], fan.a(g), fan.b(g)) && touch(new_face(fan, f), new_face(fan, g)) &&
-                    !touch(old_face(m, fan, f), old_face(m, fan, g)))
-                    return false;
-        }
+template <class Tile>
+TETISO_HD bool clear_of_neighbours(const Tile& tile, const RoundView& m, i32 u, i32 w, bool border_edge,
+                                   const NewFan& fan) {
+    const int faces = fan.count;
+    if (!fan_at_p_embedded(tile, fan) && tile_any(tile, faces * faces, [&](int k) {
+            const int f = k / faces, g = k % faces;
+            return g > f && norm2(fan.n[f]) != 0 && !apart(fan.p, fan.n[f], fan.a(g), fan.b(g)) &&
+                   touch(new_face(fan, f), new_face(fan, g)) && !touch(old_face(m, fan, f), old_face(m, fan, g));
+        }))
+        return false;
     // Each outer corner v: a[f] of one new face and b[g] of another (on the
     // border, the ends of the chain have one). Reading only v's cone settles
     // it; the ring is read where the cone does not. The corners tested face
@@ -318,15 +321,12 @@ TETISO_HD inline bool clear_of_neighbours(const RoundView& m, i32 u, i32 w, bool
     // reduction of the N = 100 paper surface), as the cone argument needs
     // every operation at that corner to keep to it.
     const i32 moved_a = border_edge ? m.border_other(u, w) : -1, moved_b = border_edge ? m.border_other(w, u) : -1;
-    for (int f = 0; f < fan.count; ++f)
-        for (const i32 v : {fan.ia[f], fan.ib[f]}) {
-            if (v == moved_a || v == moved_b || !m.cones[v].flat) {
-                if (!ring_clear(m, u, w, fan, v)) return false;
-            } else if (!inside_cone(m, v, fan.n[f])) {
-                return false;
-            }
-        }
-    return true;
+    return !tile_any(tile, 2 * faces, [&](int k) {
+        const int f = k >> 1;
+        const i32 v = k & 1 ? fan.ib[f] : fan.ia[f];
+        if (v == moved_a || v == moved_b || !m.cones[v].flat) return !ring_clear(m, u, w, fan, v);
+        return !inside_cone(m, v, fan.n[f]);
+    });
 }
 
 // ---------------------------------------------------------------------------
@@ -354,11 +354,6 @@ struct Placements {
     }
 };
 
-// owns(border_edge): whether the corners the collapse would own are its to
-// take, asked last, of a collapse that passed every other test. deferred:
-// where the samples are placed later, one by one (place_on_own_face), this
-// takes the bound they start from and the test places none (nor writes the
-// new faces' bound); null to place them here.
 // The tests of a placed collapse that read connectivity alone (the link
 // condition, locked vertices, valences, border loops): cheap, and most
 // collapses that fail, fail here.
@@ -397,12 +392,21 @@ TETISO_HD inline bool connectivity_allows(const RoundView& m, const EdgeSlots& r
     return !border_edge || m.border_other(u, w) != m.border_other(w, u);
 }
 
-template <class Owns>
-TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsView& ops, i32 i, i32* owner,
-                              const Owns& owns, double* deferred = nullptr) {
+// The tests of collapse i that follow connectivity_allows (known: already
+// passed on this state), run by a tile of threads together (tile.hpp; the
+// host's a single thread), the new faces kept in `fan`, which the tile
+// shares. owns(border_edge): whether the corners the collapse would own are
+// its to take, asked last, of a collapse that passed every other test.
+// deferred: where the samples are placed later, one by one
+// (place_on_own_face), this takes the bound they start from and the test
+// places none (nor writes the new faces' bound); null to place them here,
+// which only a single thread does (a tile's dry runs always defer them).
+template <class Tile, class Owns>
+TETISO_HD bool legal_collapse(const Tile& tile, const RoundView& m, const EdgeSlots& r, const OpsView& ops, i32 i,
+                              i32* owner, const Owns& owns, double* deferred, NewFan& fan, bool connectivity_known) {
     const i32 u = r.u, w = r.w;
     const bool border_edge = r.f1 < 0 || r.f2 < 0;
-    if (!connectivity_allows(m, r, ops, i)) return false;
+    if (!connectivity_known && !connectivity_allows(m, r, ops, i)) return false;
     const Vec p{ops.px[i], ops.py[i], ops.pz[i]};
     const Vec pu = m.s.pos(u), pw = m.s.pos(w);
     double increment = 0.0;
@@ -414,15 +418,20 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
                 std::max(increment, std::min(point_segment_distance(q, a, p), point_segment_distance(q, p, b)));
     }
 
-    // Old faces of both leaves: error bound, worst quality, mean normal.
+    // Old faces of both leaves (for_each_leaf_face's: leaf slot t < ku is
+    // u's t-th, the others w's (t - ku)-th, w's faces of the edge left out):
+    // error bound, worst quality, mean normal, folded in that order by every
+    // thread of the tile.
+    const auto leaf_slot = [&](int t) { return t < r.ku ? r.ou + t : r.ow + (t - r.ku); };
     double err_old = 0.0, q_worst = 1.0;
     Vec nsum{0, 0, 0};
-    for_each_leaf_face(r, [&](i32 slot, bool) {
-        const FaceGeometry& g = m.geo[m.face(slot)];
-        err_old = std::max(err_old, static_cast<double>(g.err));
-        q_worst = std::min(q_worst, static_cast<double>(g.q));
-        if (g.valid()) nsum = nsum + g.n();
-    });
+    tile_fold(tile, r.ku + r.kw, [&](int t) { return t < r.ku || (t - r.ku != r.wf1 && t - r.ku != r.wf2); },
+              [&](int t) { return m.geo[m.face(leaf_slot(t))]; },
+              [&](const FaceGeometry& g) {
+                  err_old = std::max(err_old, static_cast<double>(g.err));
+                  q_worst = std::min(q_worst, static_cast<double>(g.q));
+                  if (g.valid()) nsum = nsum + g.n();
+              });
     const double q_floor = std::min(m.p.q_min, q_worst);
     // A valence-3 vertex's three faces become the one across their outer
     // corners, whose area vector is the sum of theirs (an identity, for any
@@ -434,14 +443,17 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
     // collapse of a needle's short edge (the link condition fails through
     // it) in the N = 100 paper surface.
     const bool removes_valence3 = priority_class(ops.priority[i]) == kClassValence3;
-    // New faces: (p, next, prev) for every other face of both leaves.
-    NewFan fan;
-    fan.p = p;
-    fan.xyz = m.s.xyz;
-    int faces = 0;
+    // New faces: (p, next, prev) for every other face of both leaves, in
+    // their order.
+    if (tile.rank() == 0) {
+        fan.p = p;
+        fan.xyz = m.s.xyz;
+    }
     bool spoiled = false;
-    for_each_leaf_face(r, [&](i32 slot, bool removed) {
-        if (removed || spoiled) return;
+    const int faces = tile_enumerate(tile, r.ku + r.kw, [&](int t) {
+        return t < r.ku ? t != r.uf1 && t != r.uf2 : t - r.ku != r.wf1 && t - r.ku != r.wf2;
+    }, [&](int t, int place) {
+        const i32 slot = leaf_slot(t);
         const i32 ia = m.fans.next[slot];
         const i32 ib = m.fans.prev[slot];
         const Vec a = m.s.pos(ia), b = m.s.pos(ib);
@@ -471,23 +483,24 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
         // border of the paper surface, where a node on a cube face meets the
         // level).
         const bool below_floor = q_new < q_floor && !(!g.valid() && resolvable_artefact(p, a, b));
-        spoiled = moves && (below_floor || (!(q_new > 0) && g.valid()) ||
-                            (g.valid() ? q_new > 0 && !removes_valence3 && dot(n, g.n()) < m.p.cos_turn
-                                       : resolved(p, a, b) && dot(n, nsum) < 0));
-        if (faces < NewFan::kMax) {
-            fan.n[faces] = n;
-            fan.ia[faces] = ia;
-            fan.ib[faces] = ib;
-            fan.end[faces] = end;
-            fan.tri[faces] = m.face(slot);
+        const bool spoils = moves && (below_floor || (!(q_new > 0) && g.valid()) ||
+                                      (g.valid() ? q_new > 0 && !removes_valence3 && dot(n, g.n()) < m.p.cos_turn
+                                                 : resolved(p, a, b) && dot(n, nsum) < 0));
+        if (place < NewFan::kMax) {
+            fan.n[place] = n;
+            fan.ia[place] = ia;
+            fan.ib[place] = ib;
+            fan.end[place] = end;
+            fan.tri[place] = m.face(slot);
         }
-        ++faces;
-    });
+        return spoils;
+    }, &spoiled);
     if (spoiled || faces > NewFan::kMax) return false;
-    fan.count = faces;
+    if (tile.rank() == 0) fan.count = faces;
+    tile.sync(); // the fan is the tile's
     if (!m.samples.on) {
-        if (!clear_of_neighbours(m, u, w, border_edge, fan) || !owns(border_edge)) return false;
-        ops.err[i] = static_cast<float>(err_old + increment);
+        if (!clear_of_neighbours(tile, m, u, w, border_edge, fan) || !owns(border_edge)) return false;
+        if (tile.rank() == 0) ops.err[i] = static_cast<float>(err_old + increment);
         return true;
     }
     // On the border the polyline's 1D departure adds to the bounds it
@@ -495,25 +508,29 @@ TETISO_HD bool legal_collapse(const RoundView& m, const EdgeSlots& r, const OpsV
     double worst = border_edge ? err_old + increment : 0.0;
     if (worst > m.p.max_error) return false;
     if (deferred) {
-        if (!clear_of_neighbours(m, u, w, border_edge, fan) || !owns(border_edge)) return false;
+        if (!clear_of_neighbours(tile, m, u, w, border_edge, fan) || !owns(border_edge)) return false;
         *deferred = worst;
         return true;
     }
-    // The placements wait until every sample has found a face: a test that
-    // fails half way must leave the owners as they were.
-    Placements placed;
-    if (!place_samples(m, r, fan, worst, [&](i32 sample, i32 t) { placed.add(sample, t); })) return false;
-    if (!clear_of_neighbours(m, u, w, border_edge, fan) || !owns(border_edge)) return false;
-    if (owner) {
-        if (!placed.overflow) {
-            for (int k = 0; k < placed.count; ++k) owner[placed.sample[k]] = placed.triangle[k];
-        } else {
-            double again = border_edge ? err_old + increment : 0.0;
-            place_samples(m, r, fan, again, [&](i32 sample, i32 t) { owner[sample] = t; });
+    if constexpr (Tile::kSize == 1) {
+        // The placements wait until every sample has found a face: a test
+        // that fails half way must leave the owners as they were.
+        Placements placed;
+        if (!place_samples(m, r, fan, worst, [&](i32 sample, i32 t) { placed.add(sample, t); })) return false;
+        if (!clear_of_neighbours(tile, m, u, w, border_edge, fan) || !owns(border_edge)) return false;
+        if (owner) {
+            if (!placed.overflow) {
+                for (int k = 0; k < placed.count; ++k) owner[placed.sample[k]] = placed.triangle[k];
+            } else {
+                double again = border_edge ? err_old + increment : 0.0;
+                place_samples(m, r, fan, again, [&](i32 sample, i32 t) { owner[sample] = t; });
+            }
         }
+        ops.err[i] = static_cast<float>(worst);
+        return true;
+    } else {
+        return false; // not reached: see deferred
     }
-    ops.err[i] = static_cast<float>(worst);
-    return true;
 }
 
 // Whether operation e is possible: a kPending collapse gets its Φ and
@@ -532,14 +549,27 @@ TETISO_HD Verdict legal(const RoundView& m, i32 e, const OpsView& ops, i32* owne
     const EdgeSlots r = slots(m, e);
     if (ops.kind[e] == kPending && !place_collapse(m, r, ops, e)) return Verdict::kIllegal;
     bool blocked = false;
-    if (legal_collapse(m, r, ops, e, owner, [&](bool border_edge) {
+    NewFan fan;
+    if (legal_collapse(SequentialTile{}, m, r, ops, e, owner, [&](bool border_edge) {
             i32 owned[kMaxOwned];
             const int n = owned_corners(m.fans, m.cones, r.u, r.w, border_edge, owned);
             blocked = !free_corners(owned, n);
             return !blocked;
-        }, deferred))
+        }, deferred, fan, false))
         return Verdict::kLegal;
     return blocked ? Verdict::kBlocked : Verdict::kIllegal;
+}
+
+// A dry run's tests of collapse e after connectivity_allows passed on this
+// state (dry_run_all's second stage), by a tile of threads, its corners taken
+// as free: legal or illegal.
+template <class Tile>
+TETISO_HD Verdict legal_geometry(const Tile& tile, const RoundView& m, i32 e, const OpsView& ops, NewFan& fan,
+                                 double* deferred) {
+    if (ops.kind[e] == kFlip) return Verdict::kLegal;
+    return legal_collapse(tile, m, slots(m, e), ops, e, nullptr, [](bool) { return true; }, deferred, fan, true)
+               ? Verdict::kLegal
+               : Verdict::kIllegal;
 }
 
 // ---------------------------------------------------------------------------

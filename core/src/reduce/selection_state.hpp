@@ -129,7 +129,8 @@ struct CollapseTest {
     // free, with nothing written that the round reads and the samples left
     // for place() (their starting bound in *deferred), in two stages: the
     // first places the collapse and runs the tests of connectivity (false:
-    // illegal); the second, only after a first that passed, the rest.
+    // illegal); the second, only after a first that passed, the rest, by a
+    // tile of threads sharing the new faces in `fan` (legal_geometry).
     TETISO_HD bool dry_run_connectivity(i32 e) const {
         dry.kind[e] = ops.kind[e];
         dry.px[e] = ops.px[e];
@@ -140,8 +141,9 @@ struct CollapseTest {
         if (dry.kind[e] == kPending && !place_collapse(m, r, dry, e)) return false;
         return connectivity_allows(m, r, dry, e);
     }
-    TETISO_HD Verdict dry_run_rest(i32 e, double* deferred) const {
-        return legal(m, e, dry, nullptr, [](const i32*, int) { return true; }, deferred);
+    template <class Tile>
+    TETISO_HD Verdict dry_run_rest(const Tile& tile, i32 e, NewFan& fan, double* deferred) const {
+        return legal_geometry(tile, m, e, dry, fan, deferred);
     }
     TETISO_HD bool samples_on() const { return m.samples.on; }
     TETISO_HD i32 leaf_samples(i32 e) const { return leaf_sample_count(m, slots(m, e)); }
