@@ -241,8 +241,9 @@ struct ContactFilter {
     Array<ChosenQuery> queries;
     Array<u8> dropped;
     Array<i32> pair_count;
+    Array<u32> first_pair;
     Array<ContactPair> pairs;
-    Array<u8> item_overflow;
+    Array<i64> overflow_count, overflow_items;
 };
 
 // The faces beside the piece that its new faces must stay clear of, for
@@ -317,34 +318,44 @@ void drop_contacts(Exec& exec, ContactFilter<Exec>& cf, const RoundView& m, cons
             count, [=] TETISO_HD(i64 k) { return static_cast<u32>(queries[k].query.items()); }, cf.first_item);
         const u32* first_item = cf.first_item.data();
         exec.assign(cf.pair_count, count, i32{0});
-        exec.assign(cf.item_overflow, static_cast<i64>(items), u8{0});
+        exec.assign(cf.overflow_count, 1, i64{0});
         cf.pairs.resize(static_cast<std::size_t>(count) * kContactPairsPerOp);
+        cf.overflow_items.resize(static_cast<std::size_t>(items));
         i32* pair_count = cf.pair_count.data();
         ContactPair* pairs = cf.pairs.data();
-        u8* item_overflow = cf.item_overflow.data();
-        // Place p of operation k at p * count + k: a warp's threads then hold
-        // the p-th pairs of 32 operations, all busy for the first places,
-        // and later all idle together.
+        i64 *overflow_count = cf.overflow_count.data(), *overflow_items = cf.overflow_items.data();
+        // Place p of operation k at p * count + k: a warp's threads then
+        // write the p-th pairs of 32 operations. An item whose pair finds no
+        // place is listed, once, to test its pairs itself.
         exec.for_each(static_cast<i64>(items), [=] TETISO_HD(i64 item) {
             const i32 k = range_of(first_item, count, item);
             judge.for_each_pair(k, item - first_item[k], [&](u32 j, i32 entry) {
                 const i32 at = hd::atomic_add(pair_count + k, 1);
                 if (at >= kContactPairsPerOp) {
-                    item_overflow[item] = 1;
+                    overflow_items[hd::atomic_add(overflow_count, i64{1})] = item;
                     return false;
                 }
                 pairs[static_cast<i64>(at) * count + k] = ContactPair{entry, j};
                 return true;
             });
         });
-        exec.for_each(static_cast<i64>(count) * kContactPairsPerOp, [=] TETISO_HD(i64 place) {
-            const i32 k = static_cast<i32>(place % count);
-            if (place / count >= pair_count[k]) return;
-            const ContactPair pair = pairs[place];
+        // A thread per pair found: most operations find a few, so a thread
+        // per place (kContactPairsPerOp an operation) left most threads
+        // with nothing to test. An operation's pairs are its places below
+        // its count (at most kContactPairsPerOp).
+        const u64 found = exec.exclusive_sum(
+            count, [=] TETISO_HD(i64 k) {
+                return static_cast<u32>(pair_count[k] < kContactPairsPerOp ? pair_count[k] : kContactPairsPerOp);
+            },
+            cf.first_pair);
+        const u32* first_pair = cf.first_pair.data();
+        exec.for_each(static_cast<i64>(found), [=] TETISO_HD(i64 at) {
+            const i32 k = range_of(first_pair, count, at);
+            const ContactPair pair = pairs[(at - first_pair[k]) * count + k];
             if (judge.new_contact(k, pair.face, pair.entry)) hd::atomic_store(dropped + k, u8{1});
         });
-        exec.for_each(static_cast<i64>(items), [=] TETISO_HD(i64 item) {
-            if (!item_overflow[item]) return;
+        exec.for_each_of(overflow_count, static_cast<i64>(items), [=] TETISO_HD(i64 listed) {
+            const i64 item = overflow_items[listed];
             const i32 k = range_of(first_item, count, item);
             if (!judge.clear_item(k, item - first_item[k])) hd::atomic_store(dropped + k, u8{1});
         });
