@@ -128,8 +128,10 @@ TETISO_HD void for_each_leaf_face(const EdgeSlots& r, const F& f) {
 
 // The faces a collapse makes: (p, a(f), b(f)), which replace triangle tri[f]
 // (the same index: apply rewrites triangles in place). A test's largest
-// record (on the stack; on the GPU each thread's local memory, which the
-// driver reserves for every thread the device can hold). The other corners
+// record: on the stack of the thread that runs the test, or, in the GPU's
+// dry runs, in the shared memory of the tile that runs it (dry_run.hpp;
+// a thread's local memory, which the driver reserves for every thread the
+// device can hold, is slow to read back). The other corners
 // are vertices of the surface, read from its positions where needed rather
 // than kept: what a test keeps in local memory it reads back from there,
 // and the positions are shared by every test in the caches.
