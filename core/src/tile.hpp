@@ -8,9 +8,10 @@
 //
 // A tile's interface: size(), rank() (this thread's place in it), ballot(b)
 // (a mask of the threads whose b holds, bit i for rank i), sum(x) (over the
-// tile), shfl(value, rank) (rank's value, to every thread), sync() (a barrier of the tile, after which what one thread wrote
-// to memory the tile shares the others see), and the static lowest(mask)
-// (the lowest rank in mask) and count(mask).
+// tile), shfl(value, rank) (rank's value, to every thread), sync() (a
+// barrier of the tile, after which what one thread wrote to memory the tile
+// shares the others see), and the static lowest(mask) (the lowest rank in
+// mask) and count(mask).
 #pragma once
 
 #include "hd.hpp"
