@@ -59,6 +59,7 @@ public:
     }
 
     std::function<double(int task, int worker)> duration = [](int, int) { return 1.0; };
+    double batch_seconds = 0; // a GPU grant's own cost (one task or a batch), beside its tasks' durations
     std::set<int> stopped, failing;
     bool execute = false;
     std::size_t raw_triangles = 0; // what a domain task's record says it extracted, without `execute`
@@ -66,7 +67,7 @@ public:
 
     void send_task(int worker, TaskMessage message) override {
         sent.push_back({now_, worker, message.task, message.gpu});
-        const double seconds = duration(message.task, worker);
+        const double seconds = duration(message.task, worker) + (message.gpu >= 0 ? batch_seconds : 0);
         if (stopped.count(worker)) return;
         WorkerEvent event;
         event.worker = worker;
@@ -86,12 +87,12 @@ public:
         }
         pending_.emplace(now_ + seconds, std::move(event));
     }
-    // A batch takes the sum of its tasks' durations; it fails, naming the
-    // first of its tasks in `failing`, where one is.
+    // A batch takes batch_seconds and the sum of its tasks' durations; it
+    // fails, naming the first of its tasks in `failing`, where one is.
     void send_batch(int worker, BatchMessage message) override {
         const std::vector<int> tasks(message.tasks.begin(), message.tasks.end());
         batches.push_back({now_, worker, tasks, message.gpu, sent.size()});
-        double seconds = 0;
+        double seconds = batch_seconds;
         for (const int t : tasks) {
             sent.push_back({now_, worker, t, message.gpu});
             seconds += duration(t, worker);

@@ -227,6 +227,64 @@ TEST(ResourceManager, ABatchEndsNoLaterThanTheTaskAloneOnTheCpu) {
     EXPECT_EQ(manager.model(kDomain, kGpu)->samples(), 7);
 }
 
+// A GPU whose batches have a fixed cost: a batch of 32 tasks of size 10
+// takes 1.1 s, one task alone 0.12 s (the fit: 0.12 c^0.64 s for c tasks).
+// While the GPU is busy, a batch cut short by where the task would end on
+// the CPU (a remainder) is granted only where its tasks take at most
+// kRemainderWaste times a full batch's share; otherwise the task goes to
+// the CPU. An idle GPU takes any remainder.
+TEST(ResourceManager, ARemainderThatWouldWaitAndWasteTheGpuGoesToTheCpu) {
+    const auto manager_with_cpu = [](double cpu_seconds) {
+        ResourceManager manager({cpu(1), gpu(0, 1)});
+        calibrate(manager, kCpu, 10, cpu_seconds);
+        calibrate(manager, kGpu, 10, 0.12);
+        calibrate(manager, kGpu, 320, 1.1);
+        return manager;
+    };
+    const ResourceRequest r{kDomain, 10, {1, 1}, {1, 32}};
+    const auto wasteful = [](const Grant& g) { return g.predicted_seconds * 32 > ResourceManager::kRemainderWaste * 1.1 * g.count; };
+    {
+        ResourceManager manager = manager_with_cpu(1.3);
+        const Grant a = manager.request(r, 0);
+        EXPECT_EQ(a.device, kGpu);
+        EXPECT_EQ(a.count, 32);
+        // The GPU would end the task alone at 1.22 s, the CPU at 1.3 s; only
+        // two tasks fit on the GPU by then, at 0.09 s each: the CPU takes it.
+        const Grant b = manager.request(r, 0);
+        EXPECT_EQ(b.device, kCpu);
+        // The CPU booked until 1.3 s: a full batch on the GPU ends first.
+        const Grant c = manager.request(r, 0);
+        EXPECT_EQ(c.device, kGpu);
+        EXPECT_EQ(c.count, 32);
+        EXPECT_NEAR(c.start, 1.1, 1e-9);
+        // The GPU busy until 2.2 s, the CPU's next end 2.6 s: six tasks
+        // would fit, at 0.063 s each.
+        const Grant d = manager.request(r, 0);
+        EXPECT_EQ(d.device, kCpu);
+        EXPECT_NEAR(d.start, 1.3, 1e-9);
+    }
+    {
+        // The CPU would end the task at 2 s: the remainder that fits after
+        // the GPU's first batch is 23 tasks, within the waste allowed.
+        ResourceManager manager = manager_with_cpu(2.0);
+        EXPECT_EQ(manager.request(r, 0).count, 32);
+        const Grant b = manager.request(r, 0);
+        EXPECT_EQ(b.device, kGpu);
+        EXPECT_NEAR(b.start, 1.1, 1e-9);
+        EXPECT_GT(b.count, 1);
+        EXPECT_LT(b.count, 32);
+        EXPECT_FALSE(wasteful(b)) << b.count << " tasks in " << b.predicted_seconds << " s";
+    }
+    {
+        // An idle GPU takes the four tasks that end before the CPU's 0.3 s.
+        ResourceManager manager = manager_with_cpu(0.3);
+        const Grant a = manager.request(r, 0);
+        EXPECT_EQ(a.device, kGpu);
+        EXPECT_EQ(a.count, 4);
+        EXPECT_TRUE(wasteful(a));
+    }
+}
+
 TEST(ResourceManager, UntilTwoBatchSizesAreSeenABatchTakesItsTasksInTurn) {
     ResourceManager manager({cpu(1), gpu(0, 1)});
     calibrate(manager, kCpu, 10, 1.04);

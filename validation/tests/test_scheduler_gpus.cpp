@@ -180,6 +180,65 @@ TEST(Scheduler, UnderAutoTheCpuKeepsDomainsAndTheGpusTakeBatches) {
         }
 }
 
+// A GPU's batch has a cost of its own beside its tasks': under auto, a
+// grant that would wait behind the GPU's others is never a remainder of a
+// few tasks that pays that cost for little (the few that would end before
+// a core could end one). Cores that fall idle one after another while the
+// GPU is busy take such tasks themselves, and the GPU's batches stay
+// nearly full until the queue runs low.
+TEST(Scheduler, UnderAutoAGpuQueuesNoWastefulRemainders) {
+    JobConfig config = lattice_job(48, 256);
+    config.device = JobConfig::Device::automatic;
+    config.gpu_batch = 8;
+    const Job job(config);
+    const int domains = domain_count_of(job);
+    // Rank 1 drives the GPU; ranks 2-7 are cores.
+    NodeLayout nodes;
+    nodes.node_of.assign(8, 0);
+    nodes.driving = {-1, 0, -1, -1, -1, -1, -1, -1};
+    nodes.workers = {7};
+    nodes.gpus = {{0}};
+    nodes.gpu_mib = {80000};
+    SchedulerSetup setup = mpi_setup(8);
+    setup.nodes = nodes;
+    setup.cpu_seconds_per_triangle = 1e-4;
+    FakeTransport transport(job, {1, 2, 3, 4, 5, 6, 7}, true);
+    transport.raw_triangles = 10000; // a domain takes a core 1 s by the probe
+    // A GPU's grant of c tasks takes 0.2 + 0.05 c s; the cores' domains
+    // take 0.9-1.1 s, so that they fall idle at different times.
+    transport.batch_seconds = 0.2;
+    transport.duration = [&](int task, int worker) {
+        if (job.kind(task) != TaskKind::domain) return 0.01;
+        return worker == 1 ? 0.05 : 0.9 + 0.05 * (task % 5);
+    };
+    const auto seconds_per_task = [](std::size_t c) { return (0.2 + 0.05 * static_cast<double>(c)) / static_cast<double>(c); };
+    Scheduler scheduler(job, setup);
+    const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.01));
+    ASSERT_TRUE(result.has_value());
+    int on_cpu = 0;
+    for (const FakeTransport::Sent& s : transport.sent) on_cpu += job.kind(s.task) == TaskKind::domain && s.worker != 1;
+    EXPECT_GT(on_cpu, 0) << "the cores take domains";
+    // The GPU's first four grants are placed before its model has three
+    // samples of batches (one task, the learning batch, and two placed as
+    // that ends). Every later one sent while four full batches' worth of
+    // domains were unsent takes at most kRemainderWaste times a full
+    // batch's seconds per task.
+    int grants = 0;
+    for (std::size_t i = 0, b = 0; i < transport.sent.size();) {
+        const bool batch = b < transport.batches.size() && transport.batches[b].sent_before == i;
+        const std::size_t size = batch ? transport.batches[b++].tasks.size() : 1;
+        if (transport.sent[i].worker == 1 && job.kind(transport.sent[i].task) == TaskKind::domain && grants++ >= 4) {
+            int unsent = domains;
+            for (std::size_t j = 0; j < i; ++j) unsent -= job.kind(transport.sent[j].task) == TaskKind::domain;
+            if (unsent >= 4 * 8)
+                EXPECT_LE(seconds_per_task(size), ResourceManager::kRemainderWaste * seconds_per_task(8))
+                    << "a grant of " << size << " sent at " << transport.sent[i].at << " s, " << unsent << " domains unsent";
+        }
+        i += size;
+    }
+    EXPECT_GT(grants, 10);
+}
+
 // With the CPU's probe (Job::probe_cpu), no CPU worker takes a domain until
 // a first domain task has ended: then the probe's rate times its raw
 // triangles is the CPU's prior. A small job the GPUs end before a CPU task

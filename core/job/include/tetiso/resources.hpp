@@ -125,6 +125,10 @@ public:
     // The most tasks of a batch on a device whose batches so far were all of
     // one size (request()).
     static constexpr int kLearningBatch = 8;
+    // A batch smaller than the most a device may take, that would wait
+    // behind its other grants, is granted only while its tasks take at most
+    // this many times their share of a full batch (request()).
+    static constexpr double kRemainderWaste = 1.25;
 
     explicit ResourceManager(std::vector<ManagedDevice> devices);
 
