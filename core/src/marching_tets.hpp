@@ -132,6 +132,25 @@ struct Surface {
     i32 vertices, triangle_count;
 };
 
+// A pattern's crossings and triangles from the number of its corners
+// above the level, k: every edge from one of the k to one of the others is
+// crossed. The scans read them so rather than from the case table, which a
+// functor would carry into every thread of the device's scan.
+TETISO_HD constexpr u32 crossings_of(unsigned pattern) {
+    const unsigned above = (pattern & 1u) + ((pattern >> 1) & 1u) + ((pattern >> 2) & 1u) + ((pattern >> 3) & 1u);
+    return above * (4u - above);
+}
+TETISO_HD constexpr u32 triangles_of(unsigned pattern) {
+    const u32 crossings = crossings_of(pattern);
+    return crossings == 4 ? 2 : (crossings == 3 ? 1 : 0);
+}
+constexpr bool counts_match_cases() {
+    for (unsigned p = 0; p < 16; ++p)
+        if (crossings_of(p) != static_cast<u32>(extract_rules::kCases[p].crossings)) return false;
+    return true;
+}
+static_assert(counts_match_cases(), "the crossings of a pattern are those of its case");
+
 inline int bits_for(i64 n) {
     int bits = 1;
     while (bits < 32 && (i64{1} << bits) < n) ++bits;
@@ -180,15 +199,10 @@ Surface march(Exec& exec, Arrays<Exec>& a, const extract_rules::NodeView& node, 
         exec.filter(tet_count, [=] TETISO_HD(i64 t) { return pattern[t] == kBadTet; }, a.found);
         extract_rules::throw_bad_tet(domain_id, exec.get(a.found, 0));
     }
-    const u64 crossing_count = exec.exclusive_sum(
-        tet_count, [=] TETISO_HD(i64 t) { return static_cast<u32>(cases.crossings[pattern[t]]); }, a.first_crossing);
-    const u64 triangle_count = exec.exclusive_sum(
-        tet_count,
-        [=] TETISO_HD(i64 t) {
-            const i32 c = cases.crossings[pattern[t]];
-            return static_cast<u32>(c == 4 ? 2 : (c == 3 ? 1 : 0));
-        },
-        a.first_triangle);
+    const u64 crossing_count =
+        exec.exclusive_sum(tet_count, [=] TETISO_HD(i64 t) { return crossings_of(pattern[t]); }, a.first_crossing);
+    const u64 triangle_count =
+        exec.exclusive_sum(tet_count, [=] TETISO_HD(i64 t) { return triangles_of(pattern[t]); }, a.first_triangle);
     if (triangle_count > static_cast<u64>(INT32_MAX)) extract_rules::throw_too_large(domain_id);
 
     // 3. number (the codes' bits above the largest node index are 0)
