@@ -135,11 +135,12 @@ if [ -z "$sanitized" ]; then
     # the unreachable ranks; or rank 1 gets through and its first task runs
     # out of memory, named with the task and the rank; or Open MPI faults
     # inside MPI_Init, before tetiso runs, and mpirun names the rank and the
-    # signal. A limit derived from the binary's mappings would only pick one
-    # of these by a margin that the next library moves, so all three are
-    # accepted: the promise is that the job ends, the rank is named, and
-    # nothing is left behind.
-    fault "a rank that cannot start" 40 "could not all reach each other|task 'domain [0-9]+' failed on rank 1: out of memory|process rank 1 with PID [0-9]+ on node [^ ]+ exited on signal [0-9]+" 1 "ulimit -v 60000" \
+    # signal; or Open MPI cannot load its point-to-point transport there and
+    # names the process (host and pid) it could not start. A limit derived
+    # from the binary's mappings would only pick one of these by a margin
+    # that the next library moves, so all four are accepted: the promise is
+    # that the job ends, the rank is named, and nothing is left behind.
+    fault "a rank that cannot start" 40 "could not all reach each other|task 'domain [0-9]+' failed on rank 1: out of memory|process rank 1 with PID [0-9]+ on node [^ ]+ exited on signal [0-9]+|\\[[^]:]+:[0-9]+\\] PML [a-z0-9]+ cannot be selected" 1 "ulimit -v 60000" \
         run --lattice 20 --domains 8 --quiet -o "$work/out/s.ply"
     # A worker out of memory in its task: reported by the worker, named by
     # rank 0 with the task.
