@@ -43,7 +43,6 @@ std::optional<double> PerformanceModel::predict(double size) const {
 
 ResourceManager::ResourceManager(std::vector<ManagedDevice> devices)
     : devices_(std::move(devices)),
-      last_start_(devices_.size(), -std::numeric_limits<double>::infinity()),
       transfer_seconds_(devices_.size(), 0.0),
       transfer_size_(devices_.size(), 0.0) {
     if (devices_.empty()) throw Error("a resource manager needs at least one device");
@@ -118,7 +117,13 @@ double ResourceManager::units_booked_at(int device, double time, double now) con
 
 double ResourceManager::admission_time(int device, double units, double seconds, double now) const {
     const double capacity = devices_[static_cast<std::size_t>(device)].capacity;
-    const double earliest = std::max(now, last_start_[static_cast<std::size_t>(device)]);
+    // Grants are served in order: none starts before one booked earlier on
+    // the device that has not started. (Its booked start, not a start
+    // remembered at booking: a device that ends its work early starts the
+    // grants queued behind it early, and a new one may follow them at once.)
+    double earliest = now;
+    for (const auto& [ticket, b] : bookings_)
+        if (b.device == device && !b.started) earliest = std::max(earliest, b.start);
     // The units in use change only where a booking starts or ends: the
     // request fits from t if it fits at t and at every start within its span.
     std::vector<double> candidates{earliest}, starts;
@@ -216,8 +221,8 @@ Grant ResourceManager::request(const ResourceRequest& request, double now) {
     booking.end = best.start + best.predicted_seconds;
     booking.request = request;
     booking.request.size = request.size * best.count;
+    booking.count = best.count;
     bookings_[best.ticket] = booking;
-    last_start_[static_cast<std::size_t>(best.device)] = best.start;
     return best;
 }
 
@@ -246,6 +251,31 @@ bool ResourceManager::start(int ticket, double now) {
 }
 
 void ResourceManager::cancel(int ticket) { bookings_.erase(ticket); }
+
+std::optional<Grant> ResourceManager::move(int ticket, int device, double now) {
+    const auto it = bookings_.find(ticket);
+    if (it == bookings_.end() || it->second.started || it->second.device == device) return std::nullopt;
+    const Booking old = it->second;
+    const auto d = static_cast<std::size_t>(device);
+    if (d >= devices_.size() || d >= old.request.units.size()) return std::nullopt;
+    const double units = old.request.units[d];
+    if (!(units > 0) || units > devices_[d].capacity) return std::nullopt;
+    ResourceRequest one = old.request;
+    one.size = old.request.size / old.count;
+    Grant g = candidate(one, device, old.count, now);
+    // Where the old booking's start has passed, it starts no earlier than now.
+    const double old_end = std::max(old.start, now) + (old.end - old.start);
+    if (!(g.start + g.predicted_seconds < old_end)) return std::nullopt;
+    bookings_.erase(it);
+    g.ticket = next_ticket_++;
+    Booking booking = old;
+    booking.device = device;
+    booking.units = units;
+    booking.start = g.start;
+    booking.end = g.start + g.predicted_seconds;
+    bookings_[g.ticket] = booking;
+    return g;
+}
 
 void ResourceManager::finish(int ticket, double seconds, double transfer_seconds) {
     const auto it = bookings_.find(ticket);

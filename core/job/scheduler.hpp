@@ -158,6 +158,7 @@ private:
     int driver_of(int node, int device) const;
     int node_with_room() const;
     void place(int node, double now);
+    void rebalance(double now);
     int executor_of(const Placed& p) const;
     void start_granted(std::vector<SchedulerAction>& actions, double now);
     void cancel_waiting();

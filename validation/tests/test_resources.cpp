@@ -285,6 +285,63 @@ TEST(ResourceManager, ARemainderThatWouldWaitAndWasteTheGpuGoesToTheCpu) {
     }
 }
 
+// Grants on a device are served in order, but a device that ends its work
+// early starts what was queued behind it early, and takes a new grant at
+// once after that, not at the start the queue was once booked for.
+TEST(ResourceManager, ADeviceThatEndsEarlyTakesTheNextGrantAtOnce) {
+    ResourceManager manager({cpu(1), gpu(0, 1)});
+    calibrate(manager, kGpu, 10, 1.0);
+    const ResourceRequest r{kDomain, 10, {0, 1}};
+    const Grant a = manager.request(r, 0);
+    const Grant b = manager.request(r, 0);
+    EXPECT_NEAR(b.start, 1.0, 1e-9);
+    ASSERT_TRUE(manager.start(a.ticket, 0));
+    manager.finish(a.ticket, 0.1);
+    ASSERT_TRUE(manager.start(b.ticket, 0.1));
+    manager.finish(b.ticket, 0.1);
+    const Grant c = manager.request(r, 0.3);
+    EXPECT_NEAR(c.start, 0.3, 1e-9);
+}
+
+// A grant not yet started moves to a device where it would end earlier:
+// the driver of an idle GPU takes it from the queue of a busy one.
+TEST(ResourceManager, AWaitingGrantMovesWhereItWouldEndEarlier) {
+    ResourceManager manager({cpu(1), gpu(0, 1), gpu(1, 1)});
+    calibrate(manager, 1, 10, 1.0);
+    calibrate(manager, 2, 10, 2.0); // GPU 1 is predicted slower
+    const ResourceRequest either{kDomain, 10, {0, 1, 1}};
+    // GPU 0 runs one task and has two queued, at 1 s and 2 s; GPU 1 runs one
+    // until 2 s.
+    const Grant running = manager.request(either, 0);
+    const Grant other = manager.request({kDomain, 10, {0, 0, 1}}, 0);
+    const Grant first = manager.request(either, 0);
+    const Grant second = manager.request(either, 0);
+    ASSERT_TRUE(manager.start(running.ticket, 0));
+    ASSERT_TRUE(manager.start(other.ticket, 0));
+    ASSERT_EQ(running.device, 1);
+    ASSERT_EQ(first.device, 1);
+    ASSERT_EQ(second.device, 1);
+    EXPECT_NEAR(first.start, 1.0, 1e-9);
+    EXPECT_NEAR(second.start, 2.0, 1e-9);
+    // Neither a started grant nor one onto a device that cannot hold it
+    // moves; nor one to GPU 1 while it is busy (no earlier end).
+    EXPECT_FALSE(manager.move(running.ticket, 2, 0.1).has_value());
+    EXPECT_FALSE(manager.move(first.ticket, kCpu, 0.1).has_value());
+    EXPECT_FALSE(manager.move(second.ticket, 2, 0.1).has_value());
+    // GPU 1 ends early: the grant queued last on GPU 0 moves there, and
+    // starts at once.
+    manager.finish(other.ticket, 0.2);
+    const std::optional<Grant> moved = manager.move(second.ticket, 2, 0.3);
+    ASSERT_TRUE(moved.has_value());
+    EXPECT_EQ(moved->device, 2);
+    EXPECT_NEAR(moved->start, 0.3, 1e-9);
+    EXPECT_TRUE(manager.start(moved->ticket, 0.3));
+    EXPECT_THROW(manager.start(second.ticket, 0.3), Error) << "the old ticket is closed";
+    // The grant queued first ends at 2 s on GPU 0, later on GPU 1, busy
+    // again: it stays.
+    EXPECT_FALSE(manager.move(first.ticket, 2, 0.3).has_value());
+}
+
 TEST(ResourceManager, UntilTwoBatchSizesAreSeenABatchTakesItsTasksInTurn) {
     ResourceManager manager({cpu(1), gpu(0, 1)});
     calibrate(manager, kCpu, 10, 1.04);

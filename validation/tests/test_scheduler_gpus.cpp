@@ -239,6 +239,45 @@ TEST(Scheduler, UnderAutoAGpuQueuesNoWastefulRemainders) {
     EXPECT_GT(grants, 10);
 }
 
+// Under auto, idle cores place domains ahead onto the GPUs' queues, split
+// among the GPUs by predictions, which early in a job can run long for one
+// GPU (here its first tasks ran three times slower than later ones). Once
+// idle, that GPU takes the grants queued last on the other, where it would
+// end them earlier, and a GPU that ended its work early takes new grants at
+// once: the two end their domains within a batch of each other.
+TEST(Scheduler, AnIdleGpuTakesTheGrantsQueuedOnAnother) {
+    JobConfig config = lattice_job(48, 128);
+    config.device = JobConfig::Device::automatic;
+    config.gpu_batch = 8;
+    const Job job(config);
+    FakeTransport transport(job, {1, 2, 3, 4, 5, 6}, true);
+    transport.raw_triangles = 10000; // a domain takes a core 10 s by the probe
+    transport.batch_seconds = 0.1;
+    int slow = 9;
+    transport.duration = [&](int task, int worker) {
+        if (job.kind(task) != TaskKind::domain) return 0.01;
+        if (worker > 2) return 10.0;
+        return worker == 1 && slow-- > 0 ? 0.15 : 0.05;
+    };
+    SchedulerSetup setup = two_gpus_setup();
+    setup.ranks = 7;
+    setup.nodes->node_of.assign(7, 0);
+    setup.nodes->driving = {-1, 0, 1, -1, -1, -1, -1};
+    setup.nodes->workers = {6};
+    setup.cpu_seconds_per_triangle = 1e-3;
+    Scheduler scheduler(job, setup);
+    const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.01));
+    ASSERT_TRUE(result.has_value());
+    std::map<int, double> domains_end; // rank -> the end of its last domain task
+    for (const TaskRecord& r : result->tasks)
+        if (job.kind(r.task) == TaskKind::domain) domains_end[r.rank] = std::max(domains_end[r.rank], r.end);
+    ASSERT_TRUE(domains_end.count(1) && domains_end.count(2));
+    EXPECT_EQ(domains_end.size(), 2u) << "the cores, ten times slower than a batch of the GPUs, take none";
+    const double full_batch = 0.1 + 8 * 0.05;
+    EXPECT_LE(std::abs(domains_end[1] - domains_end[2]), full_batch)
+        << "GPU 0's domains end at " << domains_end[1] << " s, GPU 1's at " << domains_end[2] << " s";
+}
+
 // With the CPU's probe (Job::probe_cpu), no CPU worker takes a domain until
 // a first domain task has ended: then the probe's rate times its raw
 // triangles is the CPU's prior. A small job the GPUs end before a CPU task

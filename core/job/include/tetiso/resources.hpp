@@ -154,6 +154,13 @@ public:
     // failed, or the job stopped before it ran).
     void cancel(int ticket);
 
+    // Moves a grant that has not started to `device`, where it would end
+    // before its booking's end: the grant there (a new ticket; the old one
+    // is closed), or nothing where the grant cannot run there or would not
+    // end earlier. For a device that is idle while another works through
+    // grants booked on predictions that ran long.
+    std::optional<Grant> move(int ticket, int device, double now);
+
     // Units in use on a device now (started grants).
     double in_use(int device) const;
 
@@ -176,7 +183,8 @@ private:
         double units = 0;
         double start = 0, end = 0; // predicted, while not started; end stays predicted
         bool started = false;
-        ResourceRequest request;
+        ResourceRequest request; // its size the whole grant's
+        int count = 1;           // the tasks of the grant
     };
     // The seconds request() expects the task to take on `device` at `now`:
     // the model's prediction, and where the model has too few samples, at
@@ -197,7 +205,6 @@ private:
     std::map<std::pair<int, int>, PerformanceModel> models_; // (kind, device)
     std::map<std::pair<int, int>, double> priors_;           // (kind, device) -> seconds per unit of size
     std::map<int, Booking> bookings_;                        // ticket -> booking, open ones
-    std::vector<double> last_start_;                         // per device, for FIFO order
     std::vector<double> transfer_seconds_, transfer_size_;    // per device, measured so far
     int next_ticket_ = 0;
 };
