@@ -213,17 +213,21 @@ Grant ResourceManager::request(const ResourceRequest& request, double now) {
         const Grant full = candidate(request, best.device, most_here, now);
         if (best.predicted_seconds * most_here > kRemainderWaste * full.predicted_seconds * best.count) best = alone;
     }
-    best.ticket = next_ticket_++;
+    return book(best, request);
+}
+
+Grant ResourceManager::book(Grant grant, const ResourceRequest& request) {
+    grant.ticket = next_ticket_++;
     Booking booking;
-    booking.device = best.device;
-    booking.units = request.units[static_cast<std::size_t>(best.device)];
-    booking.start = best.start;
-    booking.end = best.start + best.predicted_seconds;
+    booking.device = grant.device;
+    booking.units = request.units[static_cast<std::size_t>(grant.device)];
+    booking.start = grant.start;
+    booking.end = grant.start + grant.predicted_seconds;
     booking.request = request;
-    booking.request.size = request.size * best.count;
-    booking.count = best.count;
-    bookings_[best.ticket] = booking;
-    return best;
+    booking.request.size = request.size * grant.count;
+    booking.count = grant.count;
+    bookings_[grant.ticket] = booking;
+    return grant;
 }
 
 double ResourceManager::in_use(int device) const {
@@ -262,19 +266,12 @@ std::optional<Grant> ResourceManager::move(int ticket, int device, double now) {
     if (!(units > 0) || units > devices_[d].capacity) return std::nullopt;
     ResourceRequest one = old.request;
     one.size = old.request.size / old.count;
-    Grant g = candidate(one, device, old.count, now);
+    const Grant g = candidate(one, device, old.count, now);
     // Where the old booking's start has passed, it starts no earlier than now.
     const double old_end = std::max(old.start, now) + (old.end - old.start);
     if (!(g.start + g.predicted_seconds < old_end)) return std::nullopt;
     bookings_.erase(it);
-    g.ticket = next_ticket_++;
-    Booking booking = old;
-    booking.device = device;
-    booking.units = units;
-    booking.start = g.start;
-    booking.end = g.start + g.predicted_seconds;
-    bookings_[g.ticket] = booking;
-    return g;
+    return book(g, one);
 }
 
 void ResourceManager::finish(int ticket, double seconds, double transfer_seconds) {

@@ -418,15 +418,12 @@ TETISO_HD bool legal_collapse(const Tile& tile, const RoundView& m, const EdgeSl
                 std::max(increment, std::min(point_segment_distance(q, a, p), point_segment_distance(q, p, b)));
     }
 
-    // Old faces of both leaves (for_each_leaf_face's: leaf slot t < ku is
-    // u's t-th, the others w's (t - ku)-th, w's faces of the edge left out):
-    // error bound, worst quality, mean normal, folded in that order by every
-    // thread of the tile.
-    const auto leaf_slot = [&](int t) { return t < r.ku ? r.ou + t : r.ow + (t - r.ku); };
+    // Old faces of both leaves (for_each_leaf_face's): error bound, worst
+    // quality, mean normal, folded in that order by every thread of the tile.
     double err_old = 0.0, q_worst = 1.0;
     Vec nsum{0, 0, 0};
-    tile_fold(tile, r.ku + r.kw, [&](int t) { return t < r.ku || (t - r.ku != r.wf1 && t - r.ku != r.wf2); },
-              [&](int t) { return m.geo[m.face(leaf_slot(t))]; },
+    tile_fold(tile, r.ku + r.kw, [&](int t) { return leaf_visited(r, t); },
+              [&](int t) { return m.geo[m.face(leaf_slot(r, t))]; },
               [&](const FaceGeometry& g) {
                   err_old = std::max(err_old, static_cast<double>(g.err));
                   q_worst = std::min(q_worst, static_cast<double>(g.q));
@@ -450,10 +447,9 @@ TETISO_HD bool legal_collapse(const Tile& tile, const RoundView& m, const EdgeSl
         fan.xyz = m.s.xyz;
     }
     bool spoiled = false;
-    const int faces = tile_enumerate(tile, r.ku + r.kw, [&](int t) {
-        return t < r.ku ? t != r.uf1 && t != r.uf2 : t - r.ku != r.wf1 && t - r.ku != r.wf2;
-    }, [&](int t, int place) {
-        const i32 slot = leaf_slot(t);
+    const auto kept = [&](int t) { return !leaf_removed(r, t); };
+    const int faces = tile_enumerate(tile, r.ku + r.kw, kept, [&](int t, int place) {
+        const i32 slot = leaf_slot(r, t);
         const i32 ia = m.fans.next[slot];
         const i32 ib = m.fans.prev[slot];
         const Vec a = m.s.pos(ia), b = m.s.pos(ib);

@@ -115,15 +115,23 @@ TETISO_HD inline EdgeSlots slots(const RoundView& m, i32 e, bool with_w_slots = 
     return r;
 }
 
+// The faces of both leaves of a collapse by index t < r.ku + r.kw: u's t-th,
+// then w's (t - r.ku)-th. leaf_removed: the face is f1 or f2, which the
+// collapse deletes; every other face becomes a new face, in this order.
+TETISO_HD inline i32 leaf_slot(const EdgeSlots& r, int t) { return t < r.ku ? r.ou + t : r.ow + (t - r.ku); }
+TETISO_HD inline bool leaf_removed(const EdgeSlots& r, int t) {
+    return t < r.ku ? t == r.uf1 || t == r.uf2 : t - r.ku == r.wf1 || t - r.ku == r.wf2;
+}
+// Whether for_each_leaf_face visits leaf face t: every face once, w's f1 and
+// f2 left out (already seen from u).
+TETISO_HD inline bool leaf_visited(const EdgeSlots& r, int t) { return t < r.ku || !leaf_removed(r, t); }
+
 // Calls f(slot, removed) for every face of both leaves of a collapse, once
-// each: u's fan, then w's without f1 and f2 (already seen from u). removed:
-// the face is f1 or f2, which the collapse deletes; every other face becomes
-// a new face in this order.
+// each: u's fan, then w's without f1 and f2.
 template <class F>
 TETISO_HD void for_each_leaf_face(const EdgeSlots& r, const F& f) {
-    for (i32 j = 0; j < r.ku; ++j) f(r.ou + j, j == r.uf1 || j == r.uf2);
-    for (i32 j = 0; j < r.kw; ++j)
-        if (j != r.wf1 && j != r.wf2) f(r.ow + j, false);
+    for (int t = 0; t < r.ku + r.kw; ++t)
+        if (leaf_visited(r, t)) f(leaf_slot(r, t), leaf_removed(r, t));
 }
 
 // The faces a collapse makes: (p, a(f), b(f)), which replace triangle tri[f]

@@ -193,6 +193,9 @@ private:
     // Where and when `request` (one task, or `count` as a batch) would run
     // on `device`.
     Grant candidate(const ResourceRequest& request, int device, int count, double now) const;
+    // Books `grant` (its device, start, seconds and count) for `request`, one
+    // task's: the grant with its ticket.
+    Grant book(Grant grant, const ResourceRequest& request);
     // When device `d` could admit `units` for `seconds`, at `now` or later.
     double admission_time(int device, double units, double seconds, double now) const;
     double units_booked_at(int device, double time, double now) const;
