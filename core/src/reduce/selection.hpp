@@ -293,8 +293,8 @@ void run_reservation_steps(Exec& exec, Selection<Exec>& sel, const SelectView& v
 // leaves share a face with it would have blocked it, so the verdict is the
 // dry run's.
 template <bool Flips, class Exec, class Test>
-void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& view, i32 n, i32 nv, u8* chosen,
-                            u8* refused, const Test& test) {
+void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& view, const i32* list, i32 n, i32 nv,
+                            u8* chosen, u8* refused, const Test& test) {
     const bool speculate = sel.speculate && !Flips;
     const i32* order = sel.order.data();
     u8* outcome = nullptr;
@@ -304,7 +304,7 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
     if constexpr (!Flips) samples = test.samples_on();
     PlacementPasses<Exec> placement(sel, n, speculate && samples && n >= sel.optimistic_min && !sel.optimism_spent);
     if (speculate) {
-        if constexpr (!Flips) dry_run_all(exec, sel, n, test, !placement.optimistic);
+        if constexpr (!Flips) dry_run_all(exec, sel, list, n, view.edges.count, test, !placement.optimistic);
         outcome = sel.outcome.data();
     }
     for (int pass = 0;; ++pass) {
@@ -327,10 +327,11 @@ void choose_by_reservations(Exec& exec, Selection<Exec>& sel, const SelectView& 
         const u64* worst = sel.worst_bits.data();
         // What the sweep's tests wrote, as the dry runs found it: the Φ and
         // position of every operation it tested, a refusal for the illegal
-        // ones, the bound and the samples' new owners for the chosen ones.
-        exec.for_each(n, [=] TETISO_HD(i64 k) {
-            const i32 rank = static_cast<i32>(k);
-            const i32 e = order[rank];
+        // ones, the bound and the samples' new owners for the chosen ones
+        // (in the dry runs' edge order, for the caches).
+        const i32* by_edge = sel.by_edge.data();
+        exec.for_each(n, [=] TETISO_HD(i64 at) {
+            const i32 rank = by_edge[at], e = list[at];
             const u8 what = outcome[rank];
             if (what == kOutcomeIllegal) {
                 // The sweep skips it where an earlier choice claimed one of its ends.
@@ -374,7 +375,7 @@ void choose(Exec& exec, Selection<Exec>& sel, SelectView v, const typename Exec:
             return;
         }
     }
-    choose_by_reservations<Flips>(exec, sel, v, n, nv, chosen, refused, test);
+    choose_by_reservations<Flips>(exec, sel, v, list.data(), n, nv, chosen, refused, test);
 }
 
 // After the collapses are chosen: stamps the closed neighbourhoods of those

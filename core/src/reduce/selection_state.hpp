@@ -185,8 +185,8 @@ struct FlipTest {
 constexpr int kPlacementLists = 4;
 constexpr i32 kOptimisticMin = 1 << 14;
 
-// Samples to place, one item each: per rank its first item, per item its
-// rank, the sample and where it goes (before it is placed: the slot of the
+// Samples to place, one item each: per position in Selection::by_edge its
+// first item, per item its rank, the sample and where it goes (before it is placed: the slot of the
 // face it lies on, -1 for a face the collapse removes); the items their own
 // face does not keep.
 template <class Exec>
@@ -211,10 +211,16 @@ struct Selection {
     // the lowest rank of a chosen operation that claimed it.
     Array<u8> outcome;
     Array<i32> entrants, claim_rank;
-    Array<i32> dry_survivors; // the ranks whose dry run passed its first stage
-    Array<i32> by_fan, fan_first, fan_scratch; // the same by the faces of their leaves (dry_run_all)
-    // Per rank: how many samples its leaves hold (where they are to be
-    // placed), the largest of their bounds, and whether they were placed.
+    // The dry runs' order (dry_run_all): the ranks by ascending edge, and
+    // per edge its rank (read only for the round's candidates).
+    Array<i32> by_edge, rank_of;
+    // Positions in by_edge: those whose dry run passed its first stage, and
+    // the same grouped by the faces of their leaves.
+    Array<i32> dry_survivors;
+    Array<i32> by_fan, fan_first, fan_scratch;
+    // How many samples the leaves hold where they are to be placed (per
+    // position in by_edge); per rank, the largest of their bounds and
+    // whether they were placed.
     Array<i32> sample_count;
     Array<u64> worst_bits;
     Array<u8> placed;
