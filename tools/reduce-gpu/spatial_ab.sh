@@ -7,7 +7,8 @@
 # --device auto on every core (cmp base against new). Packs made by
 # tools/reduce-gpu/pack.sh beside this script: base.tar.xz (tetiso,
 # bench_gpu_streams), new.tar.xz (also test_reduce_gpu, test_gpu_pipeline).
-# Run from the checkout's root; writes $OUT/all.tar.gz.
+# TESTS=0 skips the tests, REPEAT=0 the second N = 1000 runs. Run from the
+# checkout's root; writes $OUT/all.tar.gz.
 set -u
 repo=$(pwd); here=$(cd "$(dirname "$0")" && pwd); w=/tmp/sp; mkdir -p $w/out; cd $w
 for b in base new; do mkdir -p $b; tar -C $b -xJf $here/$b.tar.xz; done
@@ -47,6 +48,6 @@ for b in base new; do job $b 1000 1000 1; done
 cmp $w/n1000_d1000_base_1.vtp $w/n1000_d1000_new_1.vtp && echo "same bytes: N=1000 jobs"
 for b in base new; do job $b 500 125 1; done
 cmp $w/n500_d125_base_1.vtp $w/n500_d125_new_1.vtp && echo "same bytes: N=500 jobs"
-if [ $((SECONDS-t0)) -lt 420 ]; then for b in new base; do job $b 1000 1000 2; done; fi
+if [ "${REPEAT:-1}" = 1 ] && [ $((SECONDS-t0)) -lt 420 ]; then for b in new base; do job $b 1000 1000 2; done; fi
 echo "[$((SECONDS-t0)) s] done"
 cd $w/out && gzip -f n1000_*.json n500_*.json 2>/dev/null; tar -czf $O/all.tar.gz . ; ls $O
