@@ -426,6 +426,39 @@ TETISO_HD inline ContactQuery contact_query(const ContactGridView& g, const Box&
     return q;
 }
 
+// The entries item `item` of query q reads: [begin, end) of the grid's
+// (g.triangles, g.boxes), and for a cell the cell itself.
+struct ItemSpan {
+    i32 begin, end;
+    bool cell;
+    i64 x, y, z;
+};
+TETISO_HD inline ItemSpan item_span(const ContactGridView& g, const ContactQuery& q, i64 item) {
+    if (item == 0) return {g.first[g.groups], g.first[g.groups + 1], false, 0, 0, 0};
+    if (q.every) return {0, g.first[g.groups], false, 0, 0, 0};
+    const CellRange& r = q.cells;
+    const i64 sy = r.hi[1] - r.lo[1] + 1, sz = r.hi[2] - r.lo[2] + 1, c = item - 1;
+    const i64 x = r.lo[0] + c / (sy * sz), y = r.lo[1] + (c / sz) % sy, z = r.lo[2] + c % sz;
+    const i32 bucket = g.bucket(x, y, z);
+    return {g.first[bucket], g.first[bucket + 1], true, x, y, z};
+}
+
+// Whether entry k of span `span` is one for_each_entry_of_item calls f for:
+// its triangle's box comes within the query's box, and a triangle of a cell
+// is read once, at the first of its cells that the query reads (its lowest
+// cell, or the query's, per axis). Without the latter, a bucket that many of
+// the query's cells share (a small surface has few) is read once for each
+// of them.
+TETISO_HD inline bool entry_read(const ContactGridView& g, const ContactQuery& q, const ItemSpan& span, i32 k) {
+    const FloatBox& b = g.boxes[k];
+    if (!q.near(b)) return false;
+    if (!span.cell) return true;
+    const CellRange own = cells_of(g, b.box());
+    const CellRange& r = q.cells;
+    return std::max(own.lo[0], r.lo[0]) == span.x && std::max(own.lo[1], r.lo[1]) == span.y &&
+           std::max(own.lo[2], r.lo[2]) == span.z;
+}
+
 // Calls f(k) for every entry k (g.triangles[k], g.boxes[k]) of item `item`
 // of query q whose triangle's box comes within the query's margin of its box
 // (and for some others beside it: f must not depend on being called only
@@ -433,30 +466,9 @@ TETISO_HD inline ContactQuery contact_query(const ContactGridView& g, const Box&
 // f sees every such triangle of the grid.
 template <class F>
 TETISO_HD bool for_each_entry_of_item(const ContactGridView& g, const ContactQuery& q, i64 item, const F& f) {
-    const auto run = [&](i32 begin, i32 end) {
-        for (i32 k = begin; k < end; ++k)
-            if (q.near(g.boxes[k]) && !f(k)) return false;
-        return true;
-    };
-    if (item == 0) return run(g.first[g.groups], g.first[g.groups + 1]);
-    if (q.every) return run(0, g.first[g.groups]);
-    const CellRange& r = q.cells;
-    const i64 sy = r.hi[1] - r.lo[1] + 1, sz = r.hi[2] - r.lo[2] + 1, c = item - 1;
-    const i64 x = r.lo[0] + c / (sy * sz), y = r.lo[1] + (c / sz) % sy, z = r.lo[2] + c % sz;
-    const i32 bucket = g.bucket(x, y, z);
-    for (i32 k = g.first[bucket], end = g.first[bucket + 1]; k < end; ++k) {
-        const FloatBox& b = g.boxes[k];
-        if (!q.near(b)) continue;
-        // A triangle is read once: at the first of its cells that the query
-        // reads (its lowest cell, or the query's, per axis). Without this, a
-        // bucket that many of the query's cells share (a small surface has
-        // few) is read once for each of them.
-        const CellRange own = cells_of(g, b.box());
-        if (std::max(own.lo[0], r.lo[0]) != x || std::max(own.lo[1], r.lo[1]) != y ||
-            std::max(own.lo[2], r.lo[2]) != z)
-            continue;
-        if (!f(k)) return false;
-    }
+    const ItemSpan span = item_span(g, q, item);
+    for (i32 k = span.begin; k < span.end; ++k)
+        if (entry_read(g, q, span, k) && !f(k)) return false;
     return true;
 }
 

@@ -156,39 +156,38 @@ struct ContactJudge {
     const ChosenQuery* queries;
 
     // Calls visit(j, entry) for every pair of a new face j of operation k
-    // (made[j]) and a triangle of item `item` of its query (g.triangles[entry])
-    // that the face must stay clear of and whose boxes come within the
-    // margin, until visit returns false; whether none did.
+    // (made[j]) and triangle `entry` of the grid (g.triangles[entry]) that
+    // the face must stay clear of and whose boxes come within the margin,
+    // until visit returns false; whether none did.
     template <class Visit>
-    TETISO_HD bool for_each_pair(i32 k, i64 item, const Visit& visit) const {
+    TETISO_HD bool for_each_pair_with(i32 k, i32 entry, const Visit& visit) const {
         const i32 e = list[k];
         const i32 u = m.edges.v0[e], w = m.edges.v1[e];
-        const bool flip = ops.kind[e] == kFlip;
-        const i32 piece = g.vertex_piece ? g.vertex_piece[u] : 0;
-        const ChosenQuery& q = queries[k];
-        const u32 begin = first_face[k], end = first_face[k + 1];
-        // A face of the round the operation rewrites: a collapse's every face
-        // at u or w, a flip's two faces at both u and w.
-        const auto replaced = [&](const ContactTriangle& t) {
+        const ContactTriangle& t = g.triangles[entry];
+        if (t.made()) {
+            if (t.op == e || !chosen_before(ops, m.edges, t.op, e)) return true;
+        } else if (!t.obstacle()) {
+            // A face of the round the operation rewrites: a collapse's every
+            // face at u or w, a flip's two faces at both u and w.
             const bool at_u = t.id[0] == u || t.id[1] == u || t.id[2] == u;
             const bool at_w = t.id[0] == w || t.id[1] == w || t.id[2] == w;
-            return flip ? at_u && at_w : at_u || at_w;
-        };
-        return for_each_entry_of_item(g, q.query, item, [&](i32 entry) {
-            const ContactTriangle& t = g.triangles[entry];
-            if (t.made()) {
-                if (t.op == e || !chosen_before(ops, m.edges, t.op, e)) return true;
-            } else if (!t.obstacle() && replaced(t)) {
-                return true;
-            }
-            if (!t.obstacle() && g.vertex_piece && g.vertex_piece[t.vertex()] != piece) return true;
-            const Box tb = g.boxes[entry].box();
-            for (u32 j = begin; j < end; ++j) {
-                if (made_box[j].box().apart(tb, q.margin) || shares_corner(made[j], t)) continue;
-                if (!visit(j, entry)) return false;
-            }
-            return true;
-        });
+            if (ops.kind[e] == kFlip ? at_u && at_w : at_u || at_w) return true;
+        }
+        if (!t.obstacle() && g.vertex_piece && g.vertex_piece[t.vertex()] != g.vertex_piece[u]) return true;
+        const Box tb = g.boxes[entry].box();
+        const double margin = queries[k].margin;
+        for (u32 j = first_face[k], end = first_face[k + 1]; j < end; ++j) {
+            if (made_box[j].box().apart(tb, margin) || shares_corner(made[j], t)) continue;
+            if (!visit(j, entry)) return false;
+        }
+        return true;
+    }
+
+    // The same for every triangle of item `item` of operation k's query.
+    template <class Visit>
+    TETISO_HD bool for_each_pair(i32 k, i64 item, const Visit& visit) const {
+        return for_each_entry_of_item(g, queries[k].query, item,
+                                      [&](i32 entry) { return for_each_pair_with(k, entry, visit); });
     }
 
     // Whether new face j of operation k (made[j]) meets triangle `entry` of
@@ -214,6 +213,9 @@ struct ContactJudge {
 // paper surface, 0.09 % of the operations found more, 3.5 % more than 32);
 // an item whose pair finds no place tests its pairs itself.
 constexpr i32 kContactPairsPerOp = 64;
+// On the device a thread reads at most this many entries of an item (a
+// bucket, the large triangles, or every triangle).
+constexpr i32 kContactChunk = 16;
 
 struct ContactPair {
     i32 entry;
@@ -237,9 +239,10 @@ struct ContactFilter {
     using Array = typename Exec::template Array<T>;
     ContactGrid<Exec> grid;
     Array<i32> chosen;
-    Array<u32> first_face, first_item;
+    Array<u32> first_face, first_item, first_chunk;
     Array<ChosenQuery> queries;
     Array<u8> dropped;
+    Array<i32> overflowed;
     Array<i32> pair_count;
     Array<u32> first_pair;
     Array<ContactPair> pairs;
@@ -308,36 +311,61 @@ void drop_contacts(Exec& exec, ContactFilter<Exec>& cf, const RoundView& m, cons
                 }
         }, Exec::Grain::kTests);
     } else {
-        // On the device every item (a bucket) of every query is a thread of
-        // its own, and so is every exact test of a face against a triangle:
-        // one thread per operation left a warp waiting, most of its threads
-        // done, on the few whose buckets held the most, and the exact tests,
-        // a few per operation, ran a thread or two of a warp at a time
-        // where they ran beside the reading of the buckets.
+        // On the device the entries of every item (a bucket) of every query
+        // are read in chunks of kContactChunk, a thread each, and every exact
+        // test of a face against a triangle is a thread of its own. A thread
+        // per operation left a warp waiting, most of its threads done, on the
+        // few whose buckets held the most; a thread per item did too (2.7 of
+        // a warp's 32 threads at work, Nsight Compute), most buckets holding
+        // none or one; so an empty bucket takes no thread. The exact tests,
+        // a few per operation, ran a thread or two of a warp at a time where
+        // they ran beside the reading of the buckets.
         const u64 items = exec.exclusive_sum(
             count, [=] TETISO_HD(i64 k) { return static_cast<u32>(queries[k].query.items()); }, cf.first_item);
         const u32* first_item = cf.first_item.data();
+        const auto span_of = [=] TETISO_HD(i64 item, i32& k) {
+            k = range_of(first_item, count, item);
+            return item_span(g, queries[k].query, item - first_item[k]);
+        };
+        const u64 chunks = exec.exclusive_sum(static_cast<i64>(items), [=] TETISO_HD(i64 item) {
+            i32 k;
+            const ItemSpan span = span_of(item, k);
+            return static_cast<u32>((span.end - span.begin + kContactChunk - 1) / kContactChunk);
+        }, cf.first_chunk);
+        const u32* first_chunk = cf.first_chunk.data();
         exec.assign(cf.pair_count, count, i32{0});
         exec.assign(cf.overflow_count, 1, i64{0});
+        exec.assign(cf.overflowed, static_cast<i64>(items), i32{0});
         cf.pairs.resize(static_cast<std::size_t>(count) * kContactPairsPerOp);
         cf.overflow_items.resize(static_cast<std::size_t>(items));
         i32* pair_count = cf.pair_count.data();
         ContactPair* pairs = cf.pairs.data();
+        i32* overflowed = cf.overflowed.data();
         i64 *overflow_count = cf.overflow_count.data(), *overflow_items = cf.overflow_items.data();
         // Place p of operation k at p * count + k: a warp's threads then
-        // write the p-th pairs of 32 operations. An item whose pair finds no
-        // place is listed, once, to test its pairs itself.
-        exec.for_each(static_cast<i64>(items), [=] TETISO_HD(i64 item) {
-            const i32 k = range_of(first_item, count, item);
-            judge.for_each_pair(k, item - first_item[k], [&](u32 j, i32 entry) {
-                const i32 at = hd::atomic_add(pair_count + k, 1);
-                if (at >= kContactPairsPerOp) {
-                    overflow_items[hd::atomic_add(overflow_count, i64{1})] = item;
-                    return false;
+        // write the p-th pairs of 32 operations. An item one of whose pairs
+        // finds no place is listed, once, to test its pairs itself.
+        exec.for_each(static_cast<i64>(chunks), [=] TETISO_HD(i64 chunk) {
+            const i64 item = range_of(first_chunk, static_cast<i32>(items), chunk);
+            i32 k;
+            const ItemSpan span = span_of(item, k);
+            const ContactQuery& q = queries[k].query;
+            const i32 begin = span.begin + static_cast<i32>(chunk - first_chunk[item]) * kContactChunk;
+            const i32 end = std::min(span.end, begin + kContactChunk);
+            for (i32 entry = begin; entry < end; ++entry) {
+                if (!entry_read(g, q, span, entry)) continue;
+                const bool placed = judge.for_each_pair_with(k, entry, [&](u32 j, i32 at_entry) {
+                    const i32 at = hd::atomic_add(pair_count + k, 1);
+                    if (at >= kContactPairsPerOp) return false;
+                    pairs[static_cast<i64>(at) * count + k] = ContactPair{at_entry, j};
+                    return true;
+                });
+                if (!placed) {
+                    if (hd::atomic_add(overflowed + item, 1) == 0)
+                        overflow_items[hd::atomic_add(overflow_count, i64{1})] = item;
+                    return;
                 }
-                pairs[static_cast<i64>(at) * count + k] = ContactPair{entry, j};
-                return true;
-            });
+            }
         });
         // A thread per pair found: most operations find a few, so a thread
         // per place (kContactPairsPerOp an operation) left most threads
