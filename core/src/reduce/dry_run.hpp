@@ -16,11 +16,11 @@ constexpr i32 kFanGroups = 32;
 // tests of a collapse are a few hundred steps, its samples' placement as
 // many again for each sample, which late rounds have dozens of a face: on
 // the GPU one thread placing them all would be the round's slowest): those
-// with a sample count (sel.sample_count, 0 for every other rank), listed in
-// `items`. Raises sel.worst_bits[rank] to each sample's bound, and makes a
-// collapse illegal where one of its samples finds no face. The items follow
-// the dry runs' order (by_edge), so that neighbouring threads read
-// neighbouring faces.
+// with a sample count (sel.sample_count, by position in sel.by_edge, 0 for
+// every other), listed in `items`. Raises sel.worst_bits[rank] to each
+// sample's bound, and makes a collapse illegal where one of its samples
+// finds no face. The items follow the dry runs' order (by_edge), so that
+// neighbouring threads read neighbouring faces.
 template <class Exec, class Test>
 void place_listed_samples(Exec& exec, Selection<Exec>& sel, SampleItems<Exec>& items, i32 n, const Test& test) {
     const i32* order = sel.order.data();

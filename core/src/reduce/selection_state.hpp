@@ -186,9 +186,9 @@ constexpr int kPlacementLists = 4;
 constexpr i32 kOptimisticMin = 1 << 14;
 
 // Samples to place, one item each: per position in Selection::by_edge its
-// first item, per item its rank, the sample and where it goes (before it is placed: the slot of the
-// face it lies on, -1 for a face the collapse removes); the items their own
-// face does not keep.
+// first item; per item its rank, the sample and where it goes (before it is
+// placed: the slot of the face it lies on, -1 for a face the collapse
+// removes); the items their own face does not keep.
 template <class Exec>
 struct SampleItems {
     template <class T>
