@@ -61,6 +61,9 @@ Job::Job(const JobConfig& config) : config_(config) {
     if (config.threads < 0 || config.threads > kMaxThreads)
         throw Error(std::to_string(config.threads) + " threads per task: give 0 (all cores) to " +
                     std::to_string(kMaxThreads));
+    if (config.gpu_streams < 1 || config.gpu_streams > kMaxGpuStreams)
+        throw Error(std::to_string(config.gpu_streams) + " streams per GPU: give 1 to " +
+                    std::to_string(kMaxGpuStreams));
     if (!std::isfinite(config.max_error_spacings) || config.max_error_spacings < 0)
         throw Error("error bound " + std::to_string(config.max_error_spacings) + " is not a finite number >= 0");
     if (!std::isfinite(config.task_timeout) || config.task_timeout < 0)
@@ -88,24 +91,31 @@ Job::Job(const JobConfig& config) : config_(config) {
 
 Job::~Job() = default;
 
-const Device& Job::gpu(int index) const {
-    Device& made = gpus_[index];
-    if (!made.is_gpu()) made = Device::cuda(index);
+const std::vector<Device>& Job::gpu_lanes(int index) const {
+    std::vector<Device>& made = gpus_[index];
+    while (made.size() < static_cast<std::size_t>(std::max(1, config_.gpu_streams)))
+        made.push_back(Device::cuda(index));
     return made;
 }
 
+const Device& Job::gpu(int index) const { return gpu_lanes(index).front(); }
+
 void Job::prepare_gpu(int index) const {
-    // The paper's field on a lattice of 24^3 nodes in two domains, run as
-    // one batch, the way the driver's grants run: every kernel of a domain
-    // task runs, in a few milliseconds once loaded.
-    const LatticePartition two(24, 2, make_field("paper"));
+    // The paper's field on a lattice of 24^3 nodes in two domains a stream,
+    // run as one grant, the way the driver's grants run: every kernel of a
+    // domain task runs on every stream, in a few milliseconds once loaded.
+    const std::vector<Device>& lanes = gpu_lanes(index);
+    const int count = 2 * static_cast<int>(lanes.size());
+    const LatticePartition small(24, count, make_field("paper"));
     DomainTaskOptions options;
-    options.level = static_cast<float>(two.field().default_level());
-    options.device = gpu(index);
+    options.level = static_cast<float>(small.field().default_level());
+    options.device = lanes.front();
+    options.lanes.assign(lanes.begin() + 1, lanes.end());
     options.reduce = reduce_options_;
     options.reduce->keep_samples = true;
-    const std::vector<int> both{0, 1};
-    run_domain_tasks(two, both, options);
+    std::vector<int> domains(static_cast<std::size_t>(count));
+    for (int d = 0; d < count; ++d) domains[static_cast<std::size_t>(d)] = d;
+    run_domain_tasks(small, domains, options);
 }
 
 double Job::probe_cpu() const {
@@ -168,7 +178,11 @@ DomainTaskOptions Job::domain_options(const TaskThreads& threads) const {
     const int gpu_index = gpu_of(threads);
     DomainTaskOptions options;
     options.level = level_;
-    if (gpu_index >= 0) options.device = gpu(gpu_index);
+    if (gpu_index >= 0) {
+        const std::vector<Device>& lanes = gpu_lanes(gpu_index);
+        options.device = lanes.front();
+        options.lanes.assign(lanes.begin() + 1, lanes.end());
+    }
     options.threads = threads.count;
     if (config_.reduce) {
         options.reduce = reduce_options(threads);

@@ -33,8 +33,9 @@ NodePlacement::NodePlacement(const Job& job, int cpu_processes, const std::vecto
       usable_mib_(gpu_mib * kGpuUsableShare - kGpuContextMiB),
       domains_on_cpu_(domains_on_cpu),
       batch_limit_(static_cast<int>(std::clamp(std::floor(usable_mib_ / task_mib_), 1.0,
-                                               static_cast<double>(job.config().gpu_batch > 0 ? job.config().gpu_batch
-                                                                                              : kDefaultGpuBatch)))),
+                                               static_cast<double>(job.config().gpu_batch > 0
+                                                                   ? job.config().gpu_batch
+                                                                   : kGpuBatchPerStream * job.config().gpu_streams)))),
       cpu_seconds_per_triangle_(cpu_seconds_per_triangle) {}
 
 bool NodePlacement::cpu_takes(TaskKind kind) const {

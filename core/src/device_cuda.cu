@@ -5,6 +5,7 @@
 #include <cuda_runtime.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <functional>
 #include <string>
 #include <vector>
@@ -20,6 +21,23 @@ namespace {
 // legality test) with room to spare. The device reserves it for every
 // thread it can hold.
 constexpr std::size_t kStackBytes = 8 * 1024;
+
+// How a host thread waits for its stream (TETISO_GPU_WAIT=spin|yield|blocking,
+// read when the process first opens the device). CUDA's default spins while
+// the process has no more contexts than the machine has cores. A process
+// whose Devices are driven by more threads than it has cores (a job's GPU
+// driver is bound to one core and runs a thread per stream,
+// domain_task.hpp) must not: a spinning thread holds the core that another
+// needs to launch its kernels. Yielding costs a wait little and gives the
+// core to whichever thread has work.
+unsigned host_wait_flag() {
+    const char* text = std::getenv("TETISO_GPU_WAIT");
+    const std::string wait = text ? text : "yield";
+    if (wait == "spin") return cudaDeviceScheduleSpin;
+    if (wait == "blocking") return cudaDeviceScheduleBlockingSync;
+    if (wait == "auto") return cudaDeviceScheduleAuto;
+    return cudaDeviceScheduleYield;
+}
 
 void add(StageSeconds* to, const StageSeconds& s) {
     if (to) *to += s;
@@ -58,7 +76,8 @@ Device::State::State(int device_index) : device(device_index) {
     // them about half a millisecond, whatever its size; keep it grown. Too
     // late where this process already uses the device (another Device of
     // it): then the stack limit alone, set below, spares the resizing.
-    if (cudaInitDevice(device_index, cudaDeviceLmemResizeToMax, cudaInitDeviceFlagsAreValid) != cudaSuccess)
+    if (cudaInitDevice(device_index, cudaDeviceLmemResizeToMax | host_wait_flag(), cudaInitDeviceFlagsAreValid) !=
+        cudaSuccess)
         cudaGetLastError();
     use_device();
     cuda::check(cudaDeviceSetLimit(cudaLimitStackSize, kStackBytes), "setting the GPU threads' stack size");

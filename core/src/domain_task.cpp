@@ -4,8 +4,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <exception>
+#include <thread>
 
 #include "device_entry.hpp"
+#include "tetiso/error.hpp"
 #include "tetiso/extract.hpp"
 #include "tetiso/lattice.hpp"
 #include "tetiso/seam.hpp"
@@ -72,8 +75,10 @@ DomainTaskResult run_domain_task(const Partition& partition, int domain, const D
     return run_built(std::move(built), partition.pieces_are_manifold(), options, std::move(result));
 }
 
-std::vector<DomainTaskResult> run_domain_tasks(const Partition& partition, const std::vector<int>& domains,
-                                               const DomainTaskOptions& options) {
+namespace {
+
+std::vector<DomainTaskResult> run_on_one_device(const Partition& partition, const std::vector<int>& domains,
+                                                const DomainTaskOptions& options) {
     if (options.device.is_gpu() && options.reduce && !domains.empty()) {
         const std::optional<ReduceOptions> reduce = reduce_options_of(options);
         Device::State& gpu = options.device.state();
@@ -99,6 +104,56 @@ std::vector<DomainTaskResult> run_domain_tasks(const Partition& partition, const
     results.reserve(domains.size());
     for (const int domain : domains) results.push_back(run_domain_task(partition, domain, options));
     return results;
+}
+
+// The domains cut into `parts` runs of consecutive ones, of counts that
+// differ by one at most, each run on its own Device by a thread of its own.
+// An error is the first failing run's: its first failing domain is the first
+// of the call.
+std::vector<DomainTaskResult> run_in_lanes(const Partition& partition, const std::vector<int>& domains,
+                                           const DomainTaskOptions& options, std::size_t parts) {
+    for (std::size_t a = 0; a < parts; ++a) {
+        const Device& da = a == 0 ? options.device : options.lanes[a - 1];
+        if (!da.is_gpu()) throw Error("run_domain_tasks: a lane is the host, not a CUDA Device");
+        for (std::size_t b = 0; b < a; ++b)
+            if (&da.state() == &(b == 0 ? options.device : options.lanes[b - 1]).state())
+                throw Error("run_domain_tasks: one CUDA Device given as two lanes (each needs its own)");
+    }
+    std::vector<std::vector<DomainTaskResult>> done(parts);
+    std::vector<std::exception_ptr> failed(parts);
+    const auto run_part = [&](std::size_t p) {
+        const auto first = static_cast<std::ptrdiff_t>(domains.size() * p / parts);
+        const auto last = static_cast<std::ptrdiff_t>(domains.size() * (p + 1) / parts);
+        DomainTaskOptions lane = options;
+        lane.lanes.clear();
+        if (p > 0) lane.device = options.lanes[p - 1];
+        try {
+            done[p] = run_on_one_device(partition, std::vector<int>(domains.begin() + first, domains.begin() + last),
+                                        lane);
+        } catch (...) {
+            failed[p] = std::current_exception();
+        }
+    };
+    std::vector<std::thread> threads;
+    for (std::size_t p = 1; p < parts; ++p) threads.emplace_back(run_part, p);
+    run_part(0);
+    for (std::thread& t : threads) t.join();
+    for (const std::exception_ptr& e : failed)
+        if (e) std::rethrow_exception(e);
+    std::vector<DomainTaskResult> results;
+    results.reserve(domains.size());
+    for (std::vector<DomainTaskResult>& part : done)
+        for (DomainTaskResult& r : part) results.push_back(std::move(r));
+    return results;
+}
+
+} // namespace
+
+std::vector<DomainTaskResult> run_domain_tasks(const Partition& partition, const std::vector<int>& domains,
+                                               const DomainTaskOptions& options) {
+    const std::size_t parts = options.device.is_gpu() ? std::min(domains.size(), 1 + options.lanes.size()) : 1;
+    if (parts > 1) return run_in_lanes(partition, domains, options, parts);
+    return run_on_one_device(partition, domains, options);
 }
 
 DomainTaskResult run_domain_task(Domain domain, const DomainTaskOptions& options) {

@@ -272,7 +272,8 @@ TEST(GpuPipeline, SeamTasksOnTheGpuGiveTheCpuSeams) {
     EXPECT_EQ(seams, 7);
 }
 
-// The job with its domain tasks on the GPU writes the CPU job's surface.
+// The job with its domain tasks on the GPU, its grants on one stream or
+// several, writes the CPU job's surface.
 TEST(GpuPipeline, JobsOnTheGpuGiveTheCpuSurface) {
     for (const auto& [field, n, domains] : {std::tuple{"paper", 60, 8}, std::tuple{"torus", 44, 27}}) {
         JobConfig config;
@@ -281,11 +282,14 @@ TEST(GpuPipeline, JobsOnTheGpuGiveTheCpuSurface) {
         config.field = field;
         const JobResult cpu = run_local(Job(config), {});
         config.device = JobConfig::Device::gpu;
-        const JobResult gpu = run_local(Job(config), {});
-        EXPECT_TRUE(same_piece(cpu.surface, gpu.surface)) << field;
-        std::size_t on_gpu = 0;
-        for (const TaskRecord& t : gpu.tasks) on_gpu += t.stages.gpu >= 0;
-        EXPECT_EQ(on_gpu, static_cast<std::size_t>(domains)) << "every domain task, no seam, ran on the GPU";
+        for (const int streams : {1, 3}) {
+            config.gpu_streams = streams;
+            const JobResult gpu = run_local(Job(config), {});
+            EXPECT_TRUE(same_piece(cpu.surface, gpu.surface)) << field << ", " << streams << " streams";
+            std::size_t on_gpu = 0;
+            for (const TaskRecord& t : gpu.tasks) on_gpu += t.stages.gpu >= 0;
+            EXPECT_EQ(on_gpu, static_cast<std::size_t>(domains)) << "every domain task, no seam, ran on the GPU";
+        }
     }
 }
 

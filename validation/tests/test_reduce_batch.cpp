@@ -13,6 +13,7 @@
 
 #include "reduce_cases.hpp"
 #include "tetiso/domain_task.hpp"
+#include "tetiso/error.hpp"
 #include "tetiso/field.hpp"
 #include "tetiso/lattice.hpp"
 
@@ -180,9 +181,9 @@ private:
 };
 
 // run_domain_tasks (on the GPU: extraction, then the pieces reduced in
-// batches) against run_domain_task on the host, domain by domain, for
-// lattice domains and domains built on the host, in batches of every
-// domain and of a few thousand triangles.
+// batches, on one stream and on three side by side) against run_domain_task
+// on the host, domain by domain, for lattice domains and domains built on
+// the host, in batches of every domain and of a few thousand triangles.
 TEST(ReduceBatch, DomainTasksAreEachDomainsTaskAlone) {
     const LatticePartition lattice(36, 27, make_field("gyroid"));
     const BuiltOnHost built(lattice);
@@ -194,23 +195,34 @@ TEST(ReduceBatch, DomainTasksAreEachDomainsTaskAlone) {
     std::vector<int> domains(static_cast<std::size_t>(lattice.domain_count()));
     std::iota(domains.rbegin(), domains.rend(), 0); // any order
     DomainTaskOptions batched = alone;
+    std::vector<std::vector<Device>> lane_sets{{}};
 #ifdef TETISO_TEST_GPU
     batched.device = test::the_gpu();
+    lane_sets.push_back({Device::cuda(), Device::cuda()});
 #endif
     for (const Partition* partition : {static_cast<const Partition*>(&lattice), static_cast<const Partition*>(&built)})
-        for (const std::size_t limit : {std::size_t{0}, std::size_t{3000}}) {
-            batched.batch_triangles = limit;
-            const std::vector<DomainTaskResult> results = run_domain_tasks(*partition, domains, batched);
-            ASSERT_EQ(results.size(), domains.size());
-            std::size_t crossed = 0;
-            for (std::size_t i = 0; i < domains.size(); ++i) {
-                const DomainTaskResult one = run_domain_task(*partition, domains[i], alone);
-                EXPECT_TRUE(same_piece(one.piece, results[i].piece)) << "domain " << domains[i] << ", limit " << limit;
-                EXPECT_EQ(one.triangles_extracted, results[i].triangles_extracted) << "domain " << domains[i];
-                crossed += one.piece.triangle_count() > 0;
+        for (const std::size_t limit : {std::size_t{0}, std::size_t{3000}})
+            for (const std::vector<Device>& lanes : lane_sets) {
+                batched.batch_triangles = limit;
+                batched.lanes = lanes;
+                const std::vector<DomainTaskResult> results = run_domain_tasks(*partition, domains, batched);
+                ASSERT_EQ(results.size(), domains.size());
+                std::size_t crossed = 0;
+                for (std::size_t i = 0; i < domains.size(); ++i) {
+                    const DomainTaskResult one = run_domain_task(*partition, domains[i], alone);
+                    EXPECT_TRUE(same_piece(one.piece, results[i].piece))
+                        << "domain " << domains[i] << ", limit " << limit << ", lanes " << 1 + lanes.size();
+                    EXPECT_EQ(one.triangles_extracted, results[i].triangles_extracted) << "domain " << domains[i];
+                    crossed += one.piece.triangle_count() > 0;
+                }
+                EXPECT_GT(crossed, 1u);
             }
-            EXPECT_GT(crossed, 1u);
-        }
+#ifdef TETISO_TEST_GPU
+    // Each lane needs a Device of its own: two threads on one stream and
+    // its buffers would write over each other.
+    batched.lanes = {Device::cuda(), batched.device};
+    EXPECT_THROW(run_domain_tasks(lattice, domains, batched), Error);
+#endif
 }
 
 } // namespace

@@ -491,10 +491,11 @@ TEST(NodePlacement, DevicesAndRequestsOfAJob) {
 
     // Batches: a GPU may take up to --gpu-batch domain tasks, and no more
     // than its memory holds by the estimate or the caller allows; the CPU one.
-    EXPECT_EQ(two_gpus.batch_limit(), kDefaultGpuBatch);
+    const int default_batch = kGpuBatchPerStream * JobConfig{}.gpu_streams;
+    EXPECT_EQ(two_gpus.batch_limit(), default_batch);
     EXPECT_EQ(two_gpus.request(domain_task, nullptr, nullptr, 3).batch, (std::vector<int>{1, 3, 3}));
     EXPECT_EQ(two_gpus.request(domain_task, nullptr, nullptr, 1000).batch,
-              (std::vector<int>{1, kDefaultGpuBatch, kDefaultGpuBatch}));
+              (std::vector<int>{1, default_batch, default_batch}));
     EXPECT_TRUE(two_gpus.request(0, &left, &right, 3).batch.empty());
     config.gpu_batch = 4;
     const Job capped(config);

@@ -15,7 +15,10 @@
 // then not again; it uses no managed memory. Copies of a Device share them:
 // one thread at a time may use a CUDA Device. Several Devices of one GPU may
 // be used by as many threads at once (several domains in flight): each waits
-// for its own stream alone, its buffers growing in that stream's order.
+// for its own stream alone, its buffers growing in that stream's order, and
+// yields its core while it waits (TETISO_GPU_WAIT=spin|yield|blocking|auto,
+// read when the process first opens the device), so that threads that share
+// a core do not hold it from each other.
 //
 // The host's thread count is the options' own (ExtractOptions::threads,
 // ReduceOptions::threads), since a reduction may be offered more threads as

@@ -81,6 +81,7 @@ public:
         return [this](GlobalId a, GlobalId b) { return domains_of_edge(a, b); };
     }
     // Builds the nodes, field values, interfaces and tetrahedra of one domain.
+    // Several threads may call it at once (run_domain_tasks' lanes do).
     virtual Domain make_domain(int domain) const = 0;
     // Whether every domain's isosurface piece is a 2-manifold (with border),
     // as a convex domain's always is; if not, a domain's reduction must

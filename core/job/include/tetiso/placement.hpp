@@ -6,8 +6,8 @@
 // slots, one: each GPU is driven by one process of its node, which keeps the
 // device's context, compiled kernels and buffers from one task to the next,
 // and runs its grants one after another. A grant on a GPU carries a batch of
-// domain tasks (run_domain_tasks reduces them side by side): at most
-// --gpu-batch, as many as the GPU's memory holds by the estimate below, and
+// domain tasks (run_domain_tasks reduces them side by side, a run of them on
+// each of the GPU's --gpu-streams streams): at most --gpu-batch, as many as the GPU's memory holds by the estimate below, and
 // no more than half the GPUs' share of the domains still waiting, so that
 // the batches shrink at the end of the queue, every GPU gets some and
 // pieces keep coming back for the seams. Processes that each open a context on
@@ -51,8 +51,10 @@ inline constexpr double kGpuContextMiB = 512;
 // The share of a GPU's memory a task may plan on: the rest is left to the
 // driver and to other users of the device.
 inline constexpr double kGpuUsableShare = 0.95;
-// The most domain tasks of one GPU grant unless --gpu-batch says otherwise.
-inline constexpr int kDefaultGpuBatch = 32;
+// The most domain tasks of one GPU grant unless --gpu-batch says otherwise:
+// this many for each of the GPU's streams (--gpu-streams), which run a run of
+// the grant's domains each.
+inline constexpr int kGpuBatchPerStream = 32;
 
 // The memory of CUDA device `gpu` in MiB, from gpu_info(); 0 where unknown.
 double gpu_memory_mib(int gpu);

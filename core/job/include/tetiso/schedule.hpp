@@ -32,6 +32,9 @@
 
 namespace tetiso {
 
+// The most streams a GPU's driving process runs (JobConfig::gpu_streams).
+inline constexpr int kMaxGpuStreams = 16;
+
 struct JobConfig {
     // The mesh: the N^3 lattice test problem, split into `domains` boxes, or
     // an unstructured TetGen mesh (`mesh`, the base name), split by a
@@ -73,8 +76,13 @@ struct JobConfig {
     // outside a node's placement.
     int gpu = -1;
     // The most domain tasks a GPU grant carries (placement.hpp); 0: the
-    // default, kDefaultGpuBatch. 1: one task at a time.
+    // default, kGpuBatchPerStream for each of its streams. 1: one task at a
+    // time.
     int gpu_batch = 0;
+    // The streams a GPU's driving process runs a grant's domains on, a host
+    // thread each, side by side (DomainTaskOptions::lanes): the grant cut
+    // into as many runs of consecutive domains.
+    int gpu_streams = 2;
     // The shortest deadline a task of an MPI job gets, in seconds: a task
     // that has not ended max(this, 10 x its predicted seconds) after it was
     // sent (no deadline before some task has ended) names its rank as
@@ -233,8 +241,10 @@ private:
         return options;
     }
 
-    // CUDA device `index` of this process's node, made at its first use.
+    // CUDA device `index` of this process's node, made at its first use:
+    // its first stream; gpu_lanes: all config().gpu_streams of them.
     const Device& gpu(int index) const;
+    const std::vector<Device>& gpu_lanes(int index) const;
     // Where a domain task runs (-1: the CPU), its options, and the samples
     // its piece keeps.
     int gpu_of(const TaskThreads& threads) const;
@@ -246,7 +256,7 @@ private:
     // Made by prepare_gpu or at the first domain task that runs on each GPU
     // (rank 0 of an MPI job runs only seams, and needs none); kept for the
     // next.
-    mutable std::map<int, Device> gpus_;
+    mutable std::map<int, std::vector<Device>> gpus_;
     std::vector<TaskNode> tree_;
     float level_ = 0;
     ReduceOptions reduce_options_;
