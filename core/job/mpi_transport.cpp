@@ -63,11 +63,8 @@ bool Sends::progress() {
 }
 
 bool Sends::wait(Clock::time_point deadline) {
-    Backoff backoff;
-    while (!progress()) {
+    while (!progress())
         if (Clock::now() >= deadline) return false;
-        backoff.pause();
-    }
     return true;
 }
 
@@ -121,8 +118,8 @@ std::optional<WorkerEvent> MpiTransport::receive(double deadline) {
     heartbeat_if_due();         // also when reports keep coming and the wait never pauses
     MPI_Status status;
     const bool arrived = wait_for_message(MPI_ANY_SOURCE, status, deadline_in(deadline - clock()), [this] {
-        sends_.progress();
         heartbeat_if_due();
+        return !sends_.progress();
     });
     if (!arrived) return std::nullopt;
     const MessageBytes message = receive_probed(status);
@@ -166,8 +163,8 @@ int MpiTransport::stop(bool failed) {
         if (!greeted_[static_cast<std::size_t>(worker)]) {
             MPI_Status status;
             const bool ready = wait_for_message(worker, status, ready_by, [this] {
-                sends_.progress();
                 heartbeat_if_due();
+                return !sends_.progress();
             });
             if (!ready) return worker;
             receive_probed(status);

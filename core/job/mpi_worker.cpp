@@ -147,7 +147,7 @@ void work(const Job& job, int driven_gpu) {
     for (;;) {
         rank_zero.waiting();
         MPI_Status status;
-        if (!wait_for_message(0, status, rank_zero.deadline(), [] {})) rank_zero.silent();
+        if (!wait_for_message(0, status, rank_zero.deadline(), [] { return false; })) rank_zero.silent();
         MessageBytes message = receive_probed(status);
         rank_zero.heard(message, status.MPI_TAG);
         if (status.MPI_TAG == kLend || status.MPI_TAG == kHeartbeat) continue; // a lend for a task that ended before it came

@@ -230,9 +230,10 @@ TEST(Scheduler, UnderAutoAGpuQueuesNoWastefulRemainders) {
         if (transport.sent[i].worker == 1 && job.kind(transport.sent[i].task) == TaskKind::domain && grants++ >= 4) {
             int unsent = domains;
             for (std::size_t j = 0; j < i; ++j) unsent -= job.kind(transport.sent[j].task) == TaskKind::domain;
-            if (unsent >= 4 * 8)
+            if (unsent >= 4 * 8) {
                 EXPECT_LE(seconds_per_task(size), ResourceManager::kRemainderWaste * seconds_per_task(8))
                     << "a grant of " << size << " sent at " << transport.sent[i].at << " s, " << unsent << " domains unsent";
+            }
         }
         i += size;
     }

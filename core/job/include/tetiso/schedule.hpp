@@ -81,8 +81,9 @@ struct JobConfig {
     int gpu_batch = 0;
     // The streams a GPU's driving process runs a grant's domains on, a host
     // thread each, side by side (DomainTaskOptions::lanes): the grant cut
-    // into as many runs of consecutive domains.
-    int gpu_streams = 2;
+    // into as many runs of consecutive domains. Four ended the N = 1000 job
+    // on one H200 1.3-1.8 s before two did (results/reduce-gpu/mpi-polling).
+    int gpu_streams = 4;
     // The shortest deadline a task of an MPI job gets, in seconds: a task
     // that has not ended max(this, 10 x its predicted seconds) after it was
     // sent (no deadline before some task has ended) names its rank as
