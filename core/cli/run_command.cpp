@@ -273,7 +273,7 @@ void add_run_command(CLI::App& app, Command& run) {
                     "(0: no deadline)")
         ->check(error_bound_check())
         ->capture_default_str();
-    add_device_options(*cmd, args->device, "the domain tasks (extraction and reduction; seams stay on the CPU)", true);
+    add_device_options(*cmd, args->device, "the domain tasks (extraction and reduction; the last seams too, once no domain task is left)", true);
     CLI::Option* gpu = cmd->get_option("--gpu");
     gpu->description("With --device gpu: the one CUDA device of each node to use (0-based, after "
                      "CUDA_VISIBLE_DEVICES; default: every GPU of each node, one process driving each)")

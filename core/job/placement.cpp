@@ -88,13 +88,16 @@ std::vector<int> NodePlacement::usable_gpus(const JobConfig& config, int count) 
     return gpus;
 }
 
-ResourceRequest NodePlacement::request(int task, const Piece* left, const Piece* right, int most_in_batch) const {
+ResourceRequest NodePlacement::request(int task, const Piece* left, const Piece* right, int most_in_batch,
+                                       bool seams_on_gpus) const {
     ResourceRequest r;
     r.kind = static_cast<int>(job_.kind(task));
     r.units.assign(manager.devices().size(), 0.0);
     r.units[0] = 1; // one worker process on the CPU
     if (job_.kind(task) == TaskKind::seam) {
         r.size = static_cast<double>((left ? left->triangle_count() : 0) + (right ? right->triangle_count() : 0));
+        const bool fits = r.size * kGpuBytesPerSeamTriangle / (1 << 20) + kGpuTaskMarginMiB <= usable_mib_;
+        for (std::size_t d = 1; d < r.units.size(); ++d) r.units[d] = seams_on_gpus && fits ? 1 : 0;
         return r;
     }
     // Domains differ little in size (bisection or METIS balances them):

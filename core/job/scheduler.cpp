@@ -35,7 +35,7 @@ BatchResultMessage batch_result_message(const std::vector<TaskRecord>& records, 
 Scheduler::Scheduler(const Job& job, SchedulerSetup setup)
     : job_(job), setup_(std::move(setup)), queue_(job), pieces_(static_cast<std::size_t>(job.task_count())),
       cores_known_(static_cast<std::size_t>(setup_.ranks), false), lent_to_(static_cast<std::size_t>(setup_.ranks), -1),
-      size_sent_(static_cast<std::size_t>(job.task_count()), 1.0) {
+      size_sent_(static_cast<std::size_t>(job.task_count()), 1.0), domains_to_place_(job.partition().domain_count()) {
     result_.ranks = setup_.ranks;
     result_.cpu_seconds_per_triangle = setup_.cpu_seconds_per_triangle;
     if (!setup_.nodes) return;
@@ -293,14 +293,15 @@ double Scheduler::allowance_of(int worker) const {
 // times vary with the machine's noise, not with the domain, so the phase's
 // end is uneven whatever the order. A lent core comes back when its
 // borrower's task ends; a lender given a seam meanwhile shares it for that
-// seam's time. A GPU's driver neither lends (a task for its GPU may come at
-// any moment) nor borrows (its task runs on the GPU).
+// seam's time. A GPU's driver does not lend (a task for its GPU may come at
+// any moment), nor borrow for a domain task (it runs on the GPU); a seam it
+// runs borrows like any, its passes over the whole pieces run on the host.
 void Scheduler::lend_idle_cores(std::vector<SchedulerAction>& actions) {
     for (const int lender : idle_) {
         if (lent_to_[at(lender)] >= 0 || !cores_known_[at(lender)] || drives_gpu(lender)) continue;
         int borrower = -1;
         for (const auto& [worker, task] : running_) {
-            if (!cores_known_[at(worker)] || runs_on_gpu(worker)) continue;
+            if (!cores_known_[at(worker)] || (runs_on_gpu(worker) && job_.kind(task) == TaskKind::domain)) continue;
             if (borrower < 0 || lends_[worker] < lends_[borrower] ||
                 (lends_[worker] == lends_[borrower] && dispatched_at_[worker] > dispatched_at_[borrower]))
                 borrower = worker;
@@ -391,6 +392,10 @@ void Scheduler::place(int node, double now) {
     NodePlacement& placement = placements_[static_cast<std::size_t>(node)];
     const Piece* left = n.left >= 0 ? &*piece(n.left) : nullptr;
     const Piece* right = n.right >= 0 ? &*piece(n.right) : nullptr;
+    // Seams may go to a GPU's driver once every domain task is placed: until
+    // then the GPUs have domains to reduce, which only they and the cores
+    // can, and the cores are enough for the seams.
+    const bool seams_on_gpus = job_.kind(task) == TaskKind::seam && domains_to_place_ == 0 && !driver_of_gpu_.empty();
     Placed p;
     p.task = task;
     p.node = node;
@@ -404,13 +409,14 @@ void Scheduler::place(int node, double now) {
         most_in_batch = (waiting + 2 * gpu_slots_ - 1) / (2 * gpu_slots_);
     }
     try {
-        p.grant = placement.manager.request(placement.request(task, left, right, most_in_batch), now);
+        p.grant = placement.manager.request(placement.request(task, left, right, most_in_batch, seams_on_gpus), now);
     } catch (const Error& e) {
         fail(task, 0, e.what());
         return;
     }
     p.tasks = {task};
     while (static_cast<int>(p.tasks.size()) < p.grant.count && queue_.has_ready()) p.tasks.push_back(queue_.pop());
+    for (const int t : p.tasks) domains_to_place_ -= job_.kind(t) == TaskKind::domain;
     p.asked_at = now;
     waiting_.push_back(p);
 }

@@ -18,7 +18,8 @@
 // GPU's driver in one message and answered with one result per task. A controller that is not a worker runs a seam itself
 // when it is the only task left to run (the root, and in practice every
 // seam after the last domain). Once no task is ready, idle workers lend
-// their cores to running tasks. A task that fails stops the handing out;
+// their cores to running tasks. Once every domain task is placed, a seam
+// may go to a GPU's driver, where its region is reduced on the GPU. A task that fails stops the handing out;
 // the job ends when nothing runs. A task that has not ended by its deadline
 // — max(floor, kDeadlineFactor x its predicted seconds) after it was sent —
 // names its rank as stopped answering; the prediction is the latest, so a
@@ -198,6 +199,7 @@ private:
     std::map<std::pair<int, int>, int> driver_of_gpu_;  // (node, CUDA index) -> rank
     std::deque<NodePlacement> placements_;              // by node
     std::map<int, Placed> placed_;                      // worker -> the grant of the task it runs
+    int domains_to_place_ = 0;                          // domain tasks not yet placed
     std::deque<Placed> waiting_;                        // grants not started yet, in the order asked
     int gpu_slots_ = 0;                                 // GPUs the job places tasks on, on every node
 };

@@ -487,6 +487,11 @@ TEST(NodePlacement, DevicesAndRequestsOfAJob) {
     const NodePlacement gpu_only(job, 3, {0}, 16000.0, false);
     EXPECT_EQ(gpu_only.request(domain_task, nullptr, nullptr).units, (std::vector<double>{0, 1}));
     EXPECT_EQ(gpu_only.request(0, &left, &right).units, (std::vector<double>{1, 0}));
+    // A seam on a GPU only when the caller allows it, and only where its
+    // region fits.
+    EXPECT_EQ(gpu_only.request(0, &left, &right, 1, true).units, (std::vector<double>{1, 1}));
+    EXPECT_EQ(NodePlacement(job, 3, {0}, small).request(0, &left, &right, 1, true).units,
+              (std::vector<double>{1, 0}));
     EXPECT_THROW(NodePlacement(job, 3, {0}, small, false).request(domain_task, nullptr, nullptr), Error);
 
     // Batches: a GPU may take up to --gpu-batch domain tasks, and no more

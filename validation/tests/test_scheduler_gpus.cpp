@@ -1,6 +1,7 @@
 // The scheduler with GPUs, on the simulated clock of scheduler_fakes.hpp:
-// drivers run their GPUs' tasks and neither lend nor borrow cores; --device
-// gpu sends every domain to a driver; a GPU's grant carries a batch of
+// drivers run their GPUs' tasks, seams only once every domain task is
+// placed, never lend cores and borrow them only for a seam; --device gpu
+// sends every domain to a driver; a GPU's grant carries a batch of
 // domain tasks, every GPU gets some, the batches shrink at the end of the
 // queue, the CPU keeps domains under auto; a failure inside a batch names
 // its task; Job::execute_batch gives each task's piece alone.
@@ -11,7 +12,7 @@
 using namespace tetiso;
 using namespace tetiso::scheduler_test;
 
-TEST(Scheduler, GpuDriversRunTheirGpusTasksAndNeitherLendNorBorrow) {
+TEST(Scheduler, GpuDriversRunTheirGpusTasksAndSeamsOnlyAtTheEnd) {
     JobConfig config = lattice_job(12, 27);
     config.device = JobConfig::Device::automatic;
     const Job job(config);
@@ -32,11 +33,21 @@ TEST(Scheduler, GpuDriversRunTheirGpusTasksAndNeitherLendNorBorrow) {
     const std::optional<JobResult> result = drive(job, scheduler, transport, hooks_here(transport, job, 0.1));
     ASSERT_TRUE(result.has_value());
     int on_gpu = 0;
+    double last_domain_sent = 0;
+    for (const FakeTransport::Sent& s : transport.sent)
+        if (job.kind(s.task) == TaskKind::domain) last_domain_sent = std::max(last_domain_sent, s.at);
+    // The seams a driver ran, each (start, end), to tell its borrowing.
+    std::vector<std::pair<double, double>> driver_seams;
+    for (const TaskRecord& r : result->tasks)
+        if (r.rank == 1 && r.kind == TaskKind::seam) driver_seams.push_back({r.start, r.end});
     for (const FakeTransport::Sent& s : transport.sent) {
         if (s.worker == 1) {
             EXPECT_EQ(s.gpu, 0) << "the driver runs its GPU's tasks only";
-            EXPECT_EQ(job.kind(s.task), TaskKind::domain);
-            ++on_gpu;
+            if (job.kind(s.task) == TaskKind::domain) {
+                ++on_gpu;
+            } else {
+                EXPECT_GE(s.at, last_domain_sent) << job.describe(s.task) << " went to the GPU before every domain";
+            }
         } else {
             EXPECT_EQ(s.gpu, -1) << "task " << s.task << " for a GPU went to rank " << s.worker;
         }
@@ -44,6 +55,8 @@ TEST(Scheduler, GpuDriversRunTheirGpusTasksAndNeitherLendNorBorrow) {
     // Ten times faster, the GPU ends most domains first even behind a queue:
     // their grants wait for the driver rather than go to an idle CPU worker.
     EXPECT_GT(on_gpu, 27 / 2) << "of 27 domains";
+    // And once the domains are placed, it takes seams too.
+    EXPECT_FALSE(driver_seams.empty());
     // No rank ever holds two tasks.
     std::map<int, std::vector<std::pair<double, double>>> spans;
     for (const TaskRecord& r : result->tasks) spans[r.rank].push_back({r.start, r.end});
@@ -53,7 +66,11 @@ TEST(Scheduler, GpuDriversRunTheirGpusTasksAndNeitherLendNorBorrow) {
     }
     for (const FakeTransport::Lent& l : transport.lent) {
         EXPECT_NE(l.lender, 1);
-        EXPECT_NE(l.borrower, 1);
+        if (l.borrower == 1) {
+            EXPECT_TRUE(std::any_of(driver_seams.begin(), driver_seams.end(),
+                                    [&](const auto& span) { return span.first <= l.at && l.at <= span.second; }))
+                << "the driver borrowed cores at " << l.at << " s, running no seam";
+        }
     }
     // Every task a worker ran was placed, with a prediction.
     for (const TaskRecord& r : result->tasks)
@@ -80,8 +97,16 @@ TEST(Scheduler, DeviceGpuSendsEveryDomainToADriverAndRefusesWhatNoGpuHolds) {
         FakeTransport transport(job, {1, 2}, false);
         Scheduler scheduler(job, setup);
         ASSERT_TRUE(drive(job, scheduler, transport, hooks_here(transport, job, 0.1)).has_value());
+        double last_domain_sent = 0;
         for (const FakeTransport::Sent& s : transport.sent)
-            EXPECT_EQ(s.worker == 1, job.kind(s.task) == TaskKind::domain) << job.describe(s.task);
+            if (job.kind(s.task) == TaskKind::domain) last_domain_sent = std::max(last_domain_sent, s.at);
+        for (const FakeTransport::Sent& s : transport.sent) {
+            if (job.kind(s.task) == TaskKind::domain) {
+                EXPECT_EQ(s.worker, 1) << job.describe(s.task);
+            } else if (s.worker == 1) {
+                EXPECT_GE(s.at, last_domain_sent) << job.describe(s.task) << " went to the GPU before every domain";
+            }
+        }
     }
     // A GPU too small for a domain: the first request fails the job on rank 0.
     setup.nodes->gpu_mib = {100};

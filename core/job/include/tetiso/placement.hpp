@@ -45,6 +45,9 @@ namespace tetiso {
 // of the arrays, not a measurement; it errs large.
 inline constexpr double kGpuBytesPerTet = 256;
 inline constexpr double kGpuTaskMarginMiB = 64;
+// Device memory a seam needs on a GPU per triangle of its two pieces: the
+// region it reduces there is part of them (an estimate that errs large).
+inline constexpr double kGpuBytesPerSeamTriangle = 1024;
 // Device memory the driving process's CUDA context keeps, not available to
 // tasks.
 inline constexpr double kGpuContextMiB = 512;
@@ -65,7 +68,7 @@ public:
     // CPU capacity (at least 1); `gpus`: the CUDA indices of the GPUs the
     // node's tasks may use, of `gpu_mib` each (the first usable one's);
     // `domains_on_cpu`: false under --device gpu, where domain tasks run on
-    // a GPU only (seams always run on the CPU).
+    // a GPU only.
     // `cpu_seconds_per_triangle`: the probe's rate, 0 where there was none
     // (the CPU then learns from its own first tasks, taken at once).
     NodePlacement(const Job& job, int cpu_processes, const std::vector<int>& gpus, double gpu_mib,
@@ -74,9 +77,14 @@ public:
     // The request a task makes: a domain task one CPU process or one slot on
     // any GPU whose memory holds it, where it may come with up to
     // min(most_in_batch, batch_limit()) - 1 more domain tasks; a seam one
-    // CPU process. Throws tetiso::Error when a domain may run on a GPU only
-    // and fits none.
-    ResourceRequest request(int task, const Piece* left, const Piece* right, int most_in_batch = 1) const;
+    // CPU process, or with `seams_on_gpus` one slot on a GPU whose memory
+    // holds its region (the caller allows it once no domain task is left to
+    // place: a GPU then has nothing else to do, and a seam of the job's last
+    // ones, of up to the whole surface, would otherwise run on one worker's
+    // cores). Throws tetiso::Error when a domain may run on a GPU only and
+    // fits none.
+    ResourceRequest request(int task, const Piece* left, const Piece* right, int most_in_batch = 1,
+                            bool seams_on_gpus = false) const;
 
     // Whether the CPU may take a task of this kind now: a seam always; a
     // domain task under --device auto unless the CPU waits for its prior

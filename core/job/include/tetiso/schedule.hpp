@@ -66,7 +66,8 @@ struct JobConfig {
     int sample_rings = SeamOptions{}.sample_rings;
     int threads = 1;                 // threads inside one task
     // Where the domain tasks run: the CPU, this process's GPU `gpu`
-    // (extraction and reduction there; the seams stay on the CPU), or, with
+    // (extraction and reduction there; seams on the CPU until every domain
+    // task is placed, then on GPUs too: placement.hpp), or, with
     // automatic, wherever each node's resource manager predicts a task ends
     // first (resources.hpp). The surface is the same bytes either way.
     enum class Device { cpu, gpu, automatic };
