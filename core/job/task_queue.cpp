@@ -25,10 +25,19 @@ int copy_subtree(const std::vector<DomainTreeNode>& partition_tree, int node, st
 
 std::vector<TaskNode> task_tree(const std::vector<DomainTreeNode>& partition_tree) {
     // The subtrees hanging off the partition tree's rightmost path, in
-    // domain order: each left child on the path, then the path's last leaf.
+    // domain order: each left child on the path, then the node where the
+    // chain ends. It ends at the first node of the path that covers at most
+    // 1/kChainEnd of the domains, which joins the rest at the root as one
+    // subtree: every seam of the chain joins the whole surface so far, and
+    // a chain down to the last leaf made the job's last seconds nine seams
+    // of the whole surface one after the other, each to add a few domains
+    // (results/reduce-gpu/tail-seams).
+    constexpr int kChainEnd = 8;
+    const int domains = partition_tree[0].count;
     std::vector<int> hanging;
     int node = 0;
-    while (partition_tree[static_cast<std::size_t>(node)].left >= 0) {
+    while (partition_tree[static_cast<std::size_t>(node)].left >= 0 &&
+           (node == 0 || kChainEnd * partition_tree[static_cast<std::size_t>(node)].count > domains)) {
         hanging.push_back(partition_tree[static_cast<std::size_t>(node)].left);
         node = partition_tree[static_cast<std::size_t>(node)].right;
     }

@@ -64,11 +64,13 @@ TEST(TaskTree, EveryDomainOnceAndEverySeamJoinsAdjacentNeighbours) {
     }
 }
 
-// What the chain is for: the last domain handed out joins everything else at
-// the root, and every other task is a node of the bisection tree, unchanged,
-// or a seam of the chain, which adds one such subtree to all the domains
-// before it (so it covers domains 0 .. k).
-TEST(TaskTree, TheLastDomainJoinsAtTheRootAndTheRestIsBisectionSubtrees) {
+// What the chain is for: the last domains handed out join everything else
+// at the root as one subtree, the first node of the bisection tree's
+// rightmost path that covers at most an eighth of the domains (or its last
+// leaf); every other task is a node of the bisection tree, unchanged, or a
+// seam of the chain, which adds one such subtree to all the domains before
+// it (so it covers domains 0 .. k).
+TEST(TaskTree, TheLastDomainsJoinAtTheRootAndTheRestIsBisectionSubtrees) {
     for (const Case c : kCases) {
         if (c.domains < 2) continue;
         SCOPED_TRACE("N = " + std::to_string(c.lattice) + ", D = " + std::to_string(c.domains));
@@ -76,8 +78,15 @@ TEST(TaskTree, TheLastDomainJoinsAtTheRootAndTheRestIsBisectionSubtrees) {
         const Decomposition decomposition(lattice, c.domains);
         const std::vector<TaskNode> tree = task_tree(decomposition.tree());
         const TaskNode& last = tree[static_cast<std::size_t>(tree[0].right)];
-        EXPECT_EQ(last.count, 1);
-        EXPECT_EQ(last.first, c.domains - 1);
+        EXPECT_EQ(last.first + last.count, c.domains);
+        EXPECT_TRUE(last.count == 1 || 8 * last.count <= c.domains) << last.count << " domains join at the root";
+        // The first such node: the path's node above it covers more (or is
+        // the root).
+        for (const DomainTreeNode& b : decomposition.tree())
+            if (b.right >= 0 && decomposition.tree()[static_cast<std::size_t>(b.right)].first == last.first &&
+                decomposition.tree()[static_cast<std::size_t>(b.right)].count == last.count) {
+                EXPECT_TRUE(b.count == c.domains || 8 * b.count > c.domains) << "the chain stopped below " << b.count;
+            }
         const auto& bisection = decomposition.tree();
         int chain = 0;
         for (std::size_t t = 0; t < tree.size(); ++t) {
