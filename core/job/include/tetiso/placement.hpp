@@ -7,10 +7,12 @@
 // device's context, compiled kernels and buffers from one task to the next,
 // and runs its grants one after another. A grant on a GPU carries a batch of
 // domain tasks (run_domain_tasks reduces them side by side, a run of them on
-// each of the GPU's --gpu-streams streams): at most --gpu-batch, as many as the GPU's memory holds by the estimate below, and
-// no more than half the GPUs' share of the domains still waiting, so that
-// the batches shrink at the end of the queue, every GPU gets some and
-// pieces keep coming back for the seams. Processes that each open a context on
+// each of the GPU's --gpu-streams streams): at most --gpu-batch, as many as
+// the GPU's memory holds by the estimate below, and no more than half the
+// GPUs' share of the domains still waiting, so that the batches shrink at
+// the end of the queue, every GPU gets some and pieces keep coming back for
+// the seams. Once every domain task is placed, a grant on a GPU may also
+// carry a seam (request()). Processes that each open a context on
 // one GPU pay its set-up each, and their kernels are time-sliced, not run
 // side by side; one task at a time in one context is the fastest way to share
 // a GPU and the safe one: its memory holds one task's buffers. The memory a
