@@ -48,7 +48,7 @@ Sends::~Sends() {
 
 void Sends::send(MessageBytes bytes, int to, int tag) {
     if (bytes.size() > static_cast<std::size_t>(INT32_MAX)) throw Error("message over 2 GiB between MPI ranks");
-    in_flight_.push_back(InFlight{std::move(bytes), MPI_REQUEST_NULL});
+    in_flight_.push_back(InFlight{std::move(bytes), MPI_REQUEST_NULL, Clock::now()});
     InFlight& s = in_flight_.back();
     MPI_Isend(s.bytes.data(), static_cast<int>(s.bytes.size()), MPI_BYTE, to, tag, MPI_COMM_WORLD, &s.request);
 }
@@ -62,9 +62,20 @@ bool Sends::progress() {
     return in_flight_.empty();
 }
 
+bool Sends::moving() const {
+    const Clock::time_point now = Clock::now();
+    return std::any_of(in_flight_.begin(), in_flight_.end(), [&](const InFlight& s) { return now - s.posted < kMoving; });
+}
+
 bool Sends::wait(Clock::time_point deadline) {
-    while (!progress())
+    Backoff backoff;
+    while (!progress()) {
         if (Clock::now() >= deadline) return false;
+        if (moving())
+            std::this_thread::yield();
+        else
+            backoff.pause();
+    }
     return true;
 }
 
@@ -119,7 +130,8 @@ std::optional<WorkerEvent> MpiTransport::receive(double deadline) {
     MPI_Status status;
     const bool arrived = wait_for_message(MPI_ANY_SOURCE, status, deadline_in(deadline - clock()), [this] {
         heartbeat_if_due();
-        return !sends_.progress();
+        sends_.progress();
+        return sends_.moving();
     });
     if (!arrived) return std::nullopt;
     const MessageBytes message = receive_probed(status);
@@ -164,7 +176,8 @@ int MpiTransport::stop(bool failed) {
             MPI_Status status;
             const bool ready = wait_for_message(worker, status, ready_by, [this] {
                 heartbeat_if_due();
-                return !sends_.progress();
+                sends_.progress();
+                return sends_.moving();
             });
             if (!ready) return worker;
             receive_probed(status);

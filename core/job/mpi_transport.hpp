@@ -14,6 +14,7 @@
 
 #include <chrono>
 #include <deque>
+#include <thread>
 #include <limits>
 #include <vector>
 
@@ -54,12 +55,8 @@ using Clock = std::chrono::steady_clock;
 
 // Waits for the next message from `from` (or MPI_ANY_SOURCE) until
 // `deadline`; false when it passed first. `meanwhile` runs between polls and
-// says whether sends of this rank are still in flight: then it polls without
-// pausing. A large message moves only while its sender calls MPI (where the
-// ranks cannot read each other's memory, Open MPI's shared memory copies it
-// through fragments that the sender's progress pushes), and at a poll every
-// half millisecond the pieces of a GPU's grant, 30 MB, took a tenth of a
-// second to reach rank 0.
+// says whether sends of this rank are moving (Sends::moving): then it polls
+// again at once, only yielding its core.
 template <class Meanwhile>
 bool wait_for_message(int from, MPI_Status& status, Clock::time_point deadline, Meanwhile meanwhile) {
     Backoff backoff;
@@ -68,7 +65,10 @@ bool wait_for_message(int from, MPI_Status& status, Clock::time_point deadline, 
         MPI_Iprobe(from, MPI_ANY_TAG, MPI_COMM_WORLD, &arrived, &status);
         if (arrived) return true;
         if (Clock::now() >= deadline) return false;
-        if (!meanwhile()) backoff.pause();
+        if (meanwhile())
+            std::this_thread::yield();
+        else
+            backoff.pause();
     }
 }
 
@@ -82,15 +82,24 @@ public:
     void send(MessageBytes bytes, int to, int tag);
     // Frees the bytes of the sends that completed; true when none is left.
     bool progress();
+    // Whether a send in flight was posted less than kMoving ago. A large
+    // message moves only while its sender calls MPI (where the ranks cannot
+    // read each other's memory, Open MPI's shared memory copies it through
+    // fragments that the sender's progress pushes): polled every half
+    // millisecond, the pieces of a GPU's grant, 30 MB, took a tenth of a
+    // second to reach rank 0. So a rank with such a send polls at once; past
+    // kMoving the receiver is taken to be busy, or stopped, and polling it
+    // so often would only take the core from ranks that share it.
+    bool moving() const;
     // Waits until every send completed or `deadline` passed; true if all did.
-    // Polls without pausing: the sends move only while this rank calls MPI
-    // (wait_for_message).
     bool wait(Clock::time_point deadline);
 
 private:
+    static constexpr auto kMoving = std::chrono::milliseconds(100);
     struct InFlight {
         MessageBytes bytes;
         MPI_Request request;
+        Clock::time_point posted;
     };
     std::deque<InFlight> in_flight_;
 };
