@@ -186,7 +186,7 @@ void run_job(const RunArguments& args) {
         {"ranks", mpi.size()},
         {"workers", std::max(1, mpi.size() - 1)},
         {"threads", c.threads},
-        {"gpu_batch", c.gpu_batch},
+        {"gpu_batch", gpu_batch_of(c)},
         {"gpu_streams", c.gpu_streams},
         {"device", c.device == JobConfig::Device::gpu ? (c.gpu >= 0 ? "gpu " + std::to_string(c.gpu) : std::string("gpu"))
                    : c.device == JobConfig::Device::automatic ? std::string("auto") : std::string("cpu")},
@@ -278,18 +278,17 @@ void add_run_command(CLI::App& app, Command& run) {
     gpu->description("With --device gpu: the one CUDA device of each node to use (0-based, after "
                      "CUDA_VISIBLE_DEVICES; default: every GPU of each node, one process driving each)")
         ->default_str("every");
-    CLI::Option* batch = cmd->add_option("--gpu-batch", job.gpu_batch,
-                                         "The most domain tasks one GPU grant carries, reduced side by side (fewer "
-                                         "where the GPU's memory or the end of the queue asks for it; 1: one at a time)")
-                             ->check(CLI::Range(1, 4096))
-                             ->default_str(std::to_string(kGpuBatchPerStream) + " per stream");
+    cmd->add_option("--gpu-batch", job.gpu_batch,
+                    "The most domain tasks one GPU grant carries, reduced side by side (fewer where the GPU's memory "
+                    "or the end of the queue asks for it; 1: one at a time)")
+        ->check(CLI::Range(1, 4096))
+        ->default_str(std::to_string(kGpuBatchPerStream) + " per stream");
     cmd->add_option("--gpu-streams", job.gpu_streams,
                     "The streams a GPU runs a grant's domains on, side by side, a run of consecutive domains and a "
                     "host thread each (the surface does not depend on it)")
         ->check(CLI::Range(1, kMaxGpuStreams))
         ->capture_default_str();
-    cmd->callback([&run, args, domains, gpu, batch] {
-        if (batch->count() == 0) args->job.gpu_batch = kGpuBatchPerStream * args->job.gpu_streams;
+    cmd->callback([&run, args, domains, gpu] {
         args->job.device = args->device.on_gpu()      ? JobConfig::Device::gpu
                            : args->device.automatic() ? JobConfig::Device::automatic
                                                       : JobConfig::Device::cpu;

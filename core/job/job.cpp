@@ -100,17 +100,21 @@ const std::vector<Device>& Job::gpu_lanes(int index) const {
 
 const Device& Job::gpu(int index) const { return gpu_lanes(index).front(); }
 
+void Job::use_gpu(int index, DomainTaskOptions& options) const {
+    const std::vector<Device>& lanes = gpu_lanes(index);
+    options.device = lanes.front();
+    options.lanes.assign(lanes.begin() + 1, lanes.end());
+}
+
 void Job::prepare_gpu(int index) const {
     // The paper's field on a lattice of 24^3 nodes in two domains a stream,
     // run as one grant, the way the driver's grants run: every kernel of a
     // domain task runs on every stream, in a few milliseconds once loaded.
-    const std::vector<Device>& lanes = gpu_lanes(index);
-    const int count = 2 * static_cast<int>(lanes.size());
+    const int count = 2 * static_cast<int>(gpu_lanes(index).size());
     const LatticePartition small(24, count, make_field("paper"));
     DomainTaskOptions options;
     options.level = static_cast<float>(small.field().default_level());
-    options.device = lanes.front();
-    options.lanes.assign(lanes.begin() + 1, lanes.end());
+    use_gpu(index, options);
     options.reduce = reduce_options_;
     options.reduce->keep_samples = true;
     std::vector<int> domains(static_cast<std::size_t>(count));
@@ -178,11 +182,7 @@ DomainTaskOptions Job::domain_options(const TaskThreads& threads) const {
     const int gpu_index = gpu_of(threads);
     DomainTaskOptions options;
     options.level = level_;
-    if (gpu_index >= 0) {
-        const std::vector<Device>& lanes = gpu_lanes(gpu_index);
-        options.device = lanes.front();
-        options.lanes.assign(lanes.begin() + 1, lanes.end());
-    }
+    if (gpu_index >= 0) use_gpu(gpu_index, options);
     options.threads = threads.count;
     if (config_.reduce) {
         options.reduce = reduce_options(threads);

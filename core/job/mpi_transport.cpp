@@ -71,10 +71,7 @@ bool Sends::wait(Clock::time_point deadline) {
     Backoff backoff;
     while (!progress()) {
         if (Clock::now() >= deadline) return false;
-        if (moving())
-            std::this_thread::yield();
-        else
-            backoff.pause();
+        backoff.pause_unless_moving(moving());
     }
     return true;
 }
@@ -119,6 +116,12 @@ void MpiTransport::heartbeat_if_due() {
         heartbeat(patience_);
 }
 
+bool MpiTransport::between_polls() {
+    heartbeat_if_due();
+    sends_.progress();
+    return sends_.moving();
+}
+
 void MpiTransport::busy_for(double seconds) {
     patience_ = seconds + task_timeout_;
     heartbeat(patience_);
@@ -128,11 +131,8 @@ std::optional<WorkerEvent> MpiTransport::receive(double deadline) {
     patience_ = task_timeout_; // listening again
     heartbeat_if_due();         // also when reports keep coming and the wait never pauses
     MPI_Status status;
-    const bool arrived = wait_for_message(MPI_ANY_SOURCE, status, deadline_in(deadline - clock()), [this] {
-        heartbeat_if_due();
-        sends_.progress();
-        return sends_.moving();
-    });
+    const bool arrived =
+        wait_for_message(MPI_ANY_SOURCE, status, deadline_in(deadline - clock()), [this] { return between_polls(); });
     if (!arrived) return std::nullopt;
     const MessageBytes message = receive_probed(status);
     WorkerEvent event;
@@ -174,11 +174,7 @@ int MpiTransport::stop(bool failed) {
     for (int worker = 1; worker < ranks_; ++worker)
         if (!greeted_[static_cast<std::size_t>(worker)]) {
             MPI_Status status;
-            const bool ready = wait_for_message(worker, status, ready_by, [this] {
-                heartbeat_if_due();
-                sends_.progress();
-                return sends_.moving();
-            });
+            const bool ready = wait_for_message(worker, status, ready_by, [this] { return between_polls(); });
             if (!ready) return worker;
             receive_probed(status);
         }

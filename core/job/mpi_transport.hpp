@@ -14,8 +14,8 @@
 
 #include <chrono>
 #include <deque>
-#include <thread>
 #include <limits>
+#include <thread>
 #include <vector>
 
 #include "transport.hpp"
@@ -42,6 +42,14 @@ enum MessageTag : int {
 class Backoff {
 public:
     void pause();
+    // Between polls while this rank's sends are moving (Sends::moving): no
+    // pause, the core only yielded; otherwise pause().
+    void pause_unless_moving(bool moving) {
+        if (moving)
+            std::this_thread::yield();
+        else
+            pause();
+    }
 
 private:
     static constexpr auto kShortPause = std::chrono::microseconds(500);
@@ -65,10 +73,7 @@ bool wait_for_message(int from, MPI_Status& status, Clock::time_point deadline, 
         MPI_Iprobe(from, MPI_ANY_TAG, MPI_COMM_WORLD, &arrived, &status);
         if (arrived) return true;
         if (Clock::now() >= deadline) return false;
-        if (meanwhile())
-            std::this_thread::yield();
-        else
-            backoff.pause();
+        backoff.pause_unless_moving(meanwhile());
     }
 }
 
@@ -132,6 +137,9 @@ public:
 private:
     void heartbeat(double seconds);
     void heartbeat_if_due();
+    // What rank 0 does between polls for a message: heartbeats, its sends
+    // progressed; whether they are moving (wait_for_message).
+    bool between_polls();
 
     int ranks_;
     double task_timeout_;

@@ -32,10 +32,8 @@ NodePlacement::NodePlacement(const Job& job, int cpu_processes, const std::vecto
       task_mib_(domain_tets_ * kGpuBytesPerTet / (1 << 20) + kGpuTaskMarginMiB),
       usable_mib_(gpu_mib * kGpuUsableShare - kGpuContextMiB),
       domains_on_cpu_(domains_on_cpu),
-      batch_limit_(static_cast<int>(std::clamp(std::floor(usable_mib_ / task_mib_), 1.0,
-                                               static_cast<double>(job.config().gpu_batch > 0
-                                                                   ? job.config().gpu_batch
-                                                                   : kGpuBatchPerStream * job.config().gpu_streams)))),
+      batch_limit_(static_cast<int>(
+          std::clamp(std::floor(usable_mib_ / task_mib_), 1.0, static_cast<double>(gpu_batch_of(job.config()))))),
       cpu_seconds_per_triangle_(cpu_seconds_per_triangle) {}
 
 bool NodePlacement::cpu_takes(TaskKind kind) const {

@@ -19,8 +19,8 @@
 // when it is the only task left to run (the root, and in practice every
 // seam after the last domain). Once no task is ready, idle workers lend
 // their cores to running tasks. Once every domain task is placed, a seam
-// may go to a GPU's driver, where its region is reduced on the GPU. A task that fails stops the handing out;
-// the job ends when nothing runs. A task that has not ended by its deadline
+// may go to a GPU's driver, where its region is reduced on the GPU. A task
+// that fails stops the handing out; the job ends when nothing runs. A task that has not ended by its deadline
 // — max(floor, kDeadlineFactor x its predicted seconds) after it was sent —
 // names its rank as stopped answering; the prediction is the latest, so a
 // task sent before any had ended gets its deadline once one has.

@@ -112,11 +112,12 @@ std::vector<DomainTaskResult> run_on_one_device(const Partition& partition, cons
 // of the call.
 std::vector<DomainTaskResult> run_in_lanes(const Partition& partition, const std::vector<int>& domains,
                                            const DomainTaskOptions& options, std::size_t parts) {
+    std::vector<const Device*> devices{&options.device};
+    for (std::size_t p = 1; p < parts; ++p) devices.push_back(&options.lanes[p - 1]);
     for (std::size_t a = 0; a < parts; ++a) {
-        const Device& da = a == 0 ? options.device : options.lanes[a - 1];
-        if (!da.is_gpu()) throw Error("run_domain_tasks: a lane is the host, not a CUDA Device");
+        if (!devices[a]->is_gpu()) throw Error("run_domain_tasks: a lane is the host, not a CUDA Device");
         for (std::size_t b = 0; b < a; ++b)
-            if (&da.state() == &(b == 0 ? options.device : options.lanes[b - 1]).state())
+            if (&devices[a]->state() == &devices[b]->state())
                 throw Error("run_domain_tasks: one CUDA Device given as two lanes (each needs its own)");
     }
     std::vector<std::vector<DomainTaskResult>> done(parts);
@@ -126,7 +127,7 @@ std::vector<DomainTaskResult> run_in_lanes(const Partition& partition, const std
         const auto last = static_cast<std::ptrdiff_t>(domains.size() * (p + 1) / parts);
         DomainTaskOptions lane = options;
         lane.lanes.clear();
-        if (p > 0) lane.device = options.lanes[p - 1];
+        lane.device = *devices[p];
         try {
             done[p] = run_on_one_device(partition, std::vector<int>(domains.begin() + first, domains.begin() + last),
                                         lane);

@@ -4,8 +4,9 @@
 # twice each interleaved (and new with 4 streams twice), N = 500/125 once
 # each; per job the total, the last domain task's end, the GPU grants' gaps
 # and the CPU workers' median gap between tasks; cmp of the surfaces.
-# base.tar.xz and new.tar.xz (pack.sh: tetiso) beside this script; run from
-# the repository root on the device machine. Writes $OUT/all.tar.gz.
+# base.tar.xz, new.tar.xz (pack.sh: tetiso) and job_gaps.py beside this
+# script; run from the repository root on the device machine. Writes
+# $OUT/all.tar.gz.
 set -u
 here=$(cd "$(dirname "$0")" && pwd); w=/tmp/mp; mkdir -p $w/out; cd $w
 for b in base new; do mkdir -p $b; tar -C $b -xJf $here/$b.tar.xz; done
@@ -14,18 +15,7 @@ export LD_LIBRARY_PATH=$w/new/lib OMP_WAIT_POLICY=passive OMPI_ALLOW_RUN_AS_ROOT
 t0=$SECONDS
 job() { local b=$1 name=$2 n=$3 d=$4; shift 4
   timeout 80 mpirun --bind-to core -np $(nproc) $w/$b/bin/tetiso run --lattice $n --domains $d --device auto --quiet -o $w/$name.vtp --report out/$name.json "$@" >/dev/null 2>out/err_$name.txt
-  echo "$name rc=$? $(python3 -c "
-import json, statistics, collections
-d=json.load(open('out/$name.json')); t=d['tasks']
-dom=[x for x in t if x['kind']=='domain']; g=sorted([x for x in dom if x['device']!='cpu'], key=lambda x: x['start'])
-gaps=[b['start']-a['end'] for a,b in zip(g,g[1:]) if b['start']-a['end']>1e-6]
-by=collections.defaultdict(list)
-for x in t:
-    if x['device']=='cpu': by[x['rank']].append(x)
-cg=[]
-for xs in by.values():
-    xs.sort(key=lambda x: x['start']); cg += [b['start']-a['end'] for a,b in zip(xs,xs[1:])]
-print('total %.2f last domain %.2f gpu domains %d grant gaps %.2f s (%d) cpu median gap %.4f' % (d['seconds']['total'], max(x['end'] for x in dom), len(g), sum(gaps), len(gaps), statistics.median(cg)))" 2>&1)"; }
+  echo "$name rc=$? $(python3 $here/job_gaps.py out/$name.json 2>&1)"; }
 for i in 1 2; do job base n1000_base_$i 1000 1000; job new n1000_new_$i 1000 1000; done
 for i in 1 2; do job new n1000_new4_$i 1000 1000 --gpu-streams 4; done
 for x in new_1 base_2 new_2 new4_1 new4_2; do cmp n1000_base_1.vtp n1000_$x.vtp && echo "same bytes: N=1000 base_1, $x"; done

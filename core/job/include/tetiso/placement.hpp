@@ -60,6 +60,11 @@ inline constexpr double kGpuUsableShare = 0.95;
 // this many for each of the GPU's streams (--gpu-streams), which run a run of
 // the grant's domains each.
 inline constexpr int kGpuBatchPerStream = 32;
+// The most domain tasks of one GPU grant under `config`: --gpu-batch, or
+// its default.
+inline int gpu_batch_of(const JobConfig& config) {
+    return config.gpu_batch > 0 ? config.gpu_batch : kGpuBatchPerStream * config.gpu_streams;
+}
 
 // The memory of CUDA device `gpu` in MiB, from gpu_info(); 0 where unknown.
 double gpu_memory_mib(int gpu);

@@ -251,6 +251,8 @@ private:
     // its first stream; gpu_lanes: all config().gpu_streams of them.
     const Device& gpu(int index) const;
     const std::vector<Device>& gpu_lanes(int index) const;
+    // options' device and lanes: GPU `index`'s streams.
+    void use_gpu(int index, DomainTaskOptions& options) const;
     // Where a domain task runs (-1: the CPU), its options, and the samples
     // its piece keeps.
     int gpu_of(const TaskThreads& threads) const;
